@@ -178,8 +178,9 @@ def upload_chunks(conn: Conn, table: str, objects: Sequence[ObjectRows], storage
     Raises
     ------
     AlreadyExistsError
-        An object has chunks already (or a concurrent upload of it in the same revision committed first) in ``tgsis.<table>_chunk`` (of any version, among those the role may
-        read: a class it may not read cannot be written either): nothing is written.
+        An object has chunks already in ``tgsis.<table>_chunk`` (of any version, among those the role may
+        read: a class it may not read cannot be written either), or a concurrent upload of it in the same
+        revision committed first: nothing is written.
     NotVersionedError, ReadOnlyRevisionError
         The session may not write here (as for today's COPY into storage).
     InvalidInputError
