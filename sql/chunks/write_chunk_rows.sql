@@ -58,7 +58,7 @@ DECLARE
     v_con      record;
     v_k        text[];    -- the chunk key's columns (quoted): the keys, then chunk
     v_parts    jsonb;
-    v_part     record;
+    v_rows     text;      -- p_rows schema-qualified: never read as one of the statement's CTEs (k, v, m...)
     v_lock     text;
     v_unlocked text;
     v_newk     text;      -- the chunk key of a p_rows row r
@@ -157,9 +157,11 @@ BEGIN
     END IF;
 
     -- the writing statement, from a template whose {parts} are made by format() from the column lists
+    SELECT format('%I.%I', s.nspname, c.relname) INTO v_rows
+      FROM pg_class c JOIN pg_namespace s ON s.oid = c.relnamespace WHERE c.oid = p_rows;
     v_k := ARRAY(SELECT quote_ident(k) FROM unnest(v_keys) AS k) || 'chunk'::text;
     v_parts := jsonb_build_object(
-        'rows', p_rows::text,
+        'rows', v_rows,
         'chunk', v_chunk::text,
         'vis', v_vis,
         'todo', format('($3::text[] IS NULL OR ROW(%s)::text = ANY ($3))', v_newk),
@@ -283,21 +285,23 @@ WITH k AS (
 SELECT (SELECT count(*) FROM (SELECT * FROM upd UNION SELECT * FROM del UNION SELECT * FROM cls UNION SELECT * FROM ins) w),
        ARRAY(SELECT ROW({n_K})::text FROM fresh n EXCEPT SELECT ROW({i_K})::text FROM ins i)
 $q$;
-    FOR v_part IN SELECT p.key, p.value FROM jsonb_each_text(v_parts) AS p ORDER BY length(p.key) DESC LOOP
-        v_sql := replace(v_sql, '{' || v_part.key || '}', v_part.value);
-    END LOOP;
+    -- one pass over the template: a part's text (a table's name may hold '{cc}') is never searched for placeholders
+    SELECT string_agg(CASE WHEN t.m[1] IS NULL THEN t.m[2] ELSE v_parts->>substr(t.m[1], 2, length(t.m[1]) - 2) END,
+                      '' ORDER BY t.o)
+      INTO v_sql
+      FROM regexp_matches(v_sql, '(\{[A-Za-z_]+\})|([^{]+|\{)', 'g') WITH ORDINALITY AS t(m, o);
     v_lock := format(
         'SELECT coalesce(array_agg(l.t), ''{}'') FROM (
            SELECT c.ctid AS t FROM %1$s c
             WHERE (%2$s) IN (SELECT %3$s FROM %4$s r WHERE ($3::text[] IS NULL OR ROW(%3$s)::text = ANY ($3)))
               AND %5$s AND c.ctid <> ALL ($4)
             ORDER BY %2$s FOR UPDATE OF c) l',
-        v_chunk, v_parts->>'c_K', v_newk, p_rows, v_vis);
+        v_chunk, v_parts->>'c_K', v_newk, v_rows, v_vis);
     v_unlocked := format(
         'SELECT EXISTS (SELECT FROM %1$s c
             WHERE (%2$s) IN (SELECT %3$s FROM %4$s r WHERE ($3::text[] IS NULL OR ROW(%3$s)::text = ANY ($3)))
               AND %5$s AND c.ctid <> ALL ($4))',
-        v_chunk, v_parts->>'c_K', v_newk, p_rows, v_vis);
+        v_chunk, v_parts->>'c_K', v_newk, v_rows, v_vis);
 
     LOOP
         v_round := v_round + 1;
