@@ -12,10 +12,32 @@ import psycopg
 import pytest
 from psycopg import sql
 
-from tests.test_chunk_tables import MODEL1, _make_chunks, _vertices, _visible
 from tgsis._chunks import ChunkColumns, encode, to_copy
 
 Conn = psycopg.Connection[Any]
+
+TRGL = ChunkColumns(("vrtxid1", "vrtxid2", "vrtxid3"), refs=("vrtxid1", "vrtxid2", "vrtxid3"))
+XYZ = ChunkColumns(("x", "y", "z"))
+INT4_MAX = 2**31 - 1
+
+
+def make_chunks(conn: Conn, tables: tuple[str, ...]) -> None:
+    for table in tables:
+        conn.execute("SELECT tgsis.create_chunk_table(%s), tgsis.create_chunk_view(%s)", (table, table))
+    conn.commit()
+
+
+def vertices(ids: range, scale: float) -> list[tuple[Any, ...]]:
+    return [(1, i, i * scale, -i * scale, 0.5 + i) for i in ids]
+
+
+def visible_vertices(conn: Conn) -> list[tuple[Any, ...]]:
+    return [
+        tuple(r)
+        for r in conn.execute(
+            "SELECT geoid, vrtxid, x, y, z FROM tgsis.vrtx_chunk_rows c WHERE NOT revclosed ORDER BY 1, 2"
+        ).fetchall()
+    ]
 
 
 def _rows_table(conn: Conn, name: str, table: str, rows: list[tuple[Any, ...]]) -> None:
@@ -36,13 +58,102 @@ def test_writer_reads_the_rows_table_it_is_given_whatever_its_name(conn: Conn, n
     first, so a placeholder inside the rows table's name was replaced too (``rows{cc}`` became ``rowsvrtxid``:
     another table was read than the one checked); and the table's name was unqualified, so a temporary table
     named like one of the statement's CTEs (k, v, m...) was read as that CTE."""
-    _make_chunks(conn, ["vrtx"])
-    given = _vertices(range(0, 30), scale=2.0)
+    make_chunks(conn, ("vrtx",))
+    given = vertices(range(0, 30), scale=2.0)
     _rows_table(conn, name, "vrtx", given)
     if name == "rows{cc}":  # what the name becomes once {cc} is replaced: rows that no check looked at
-        _rows_table(conn, "rowsvrtxid", "vrtx", _vertices(range(100, 130), scale=-1.0))
+        _rows_table(conn, "rowsvrtxid", "vrtx", vertices(range(100, 130), scale=-1.0))
     written = conn.execute(
         "SELECT tgsis.write_chunk_rows('vrtx', %s::regclass)", (sql.Identifier("pg_temp", name).as_string(conn),)
     ).fetchone()
     assert written == (1,)
-    assert _visible(conn, "vrtx") == sorted(given)
+    assert visible_vertices(conn) == sorted(given)
+
+
+def _copy_rows(conn: Conn, name: str, table: str, types: list[str], ids: Any, columns: list[Any]) -> None:
+    conn.execute(
+        sql.SQL("CREATE TEMP TABLE {} (LIKE tgsis.{}, _delete boolean NOT NULL DEFAULT false)").format(
+            sql.Identifier(name), sql.Identifier(table)
+        )
+    )
+    names = [
+        c[0]
+        for c in conn.execute(sql.SQL("SELECT * FROM pg_temp.{} LIMIT 0").format(sql.Identifier(name))).description
+        or []
+    ]
+    query = sql.SQL("COPY pg_temp.{} ({}) FROM STDIN (FORMAT BINARY)").format(
+        sql.Identifier(name), sql.SQL(", ").join(map(sql.Identifier, names[:-1]))
+    )
+    with conn.cursor(binary=True).copy(query) as copy:
+        copy.set_types(["int8", "int8", *types])
+        for i, row in enumerate(ids.tolist()):
+            copy.write_row([1, row, *(c[i] for c in columns)])
+
+
+def _server_copy(conn: Conn, table: str, spec: ChunkColumns) -> bytes:
+    query = sql.SQL(
+        "COPY (SELECT {} FROM tgsis.{} WHERE geoid = 1 AND NOT revclosed ORDER BY chunk) TO STDOUT (FORMAT binary)"
+    ).format(sql.SQL(", ").join(map(sql.Identifier, spec.copy_columns())), sql.Identifier(f"{table}_chunk"))
+    out = bytearray()
+    with conn.cursor().copy(query) as copy:
+        for block in copy:
+            out += block
+    return bytes(out)
+
+
+def test_the_sql_writer_and_the_codec_write_the_same_bytes(conn: Conn) -> None:
+    """tgsis.write_chunk_rows and tgsis._chunks.encode/to_copy make the same chunk rows for the same rows, byte for
+    byte: holes, arrays' ends, vbase or _wide (at the int4 bounds of both differences), doubles' bits."""
+    make_chunks(conn, ("vrtx", "trgl"))
+    rng = np.random.default_rng(40)
+    # triangles: chunk 0 dense, chunk 1 with holes (one alone in the middle), chunks at the int4 bounds, one wide
+    tids = [
+        *range(0, 1024),
+        *(1024 + s for s in (0, 1, 500, 1023)),
+        5 * 1024 + 7,
+        6 * 1024,
+        6 * 1024 + 1,
+        7 * 1024 + 3,
+        8 * 1024,
+        8 * 1024 + 2,
+        2**40 + 5,
+    ]
+    corners: list[list[int]] = []
+    for _t in tids:
+        base = int(rng.integers(0, 2**30)) + (2**40 if _t > 2**32 else 0)
+        corners.append([base, base + 1, base + 2 + int(rng.integers(0, 50))])
+    corners[tids.index(5 * 1024 + 7)] = [7, 7 + INT4_MAX, 6]  # vK - v1 = INT4_MAX: fits
+    corners[tids.index(6 * 1024)] = [INT4_MAX, 0, 1]  # v1 - vbase = INT4_MAX: fits
+    corners[tids.index(6 * 1024 + 1)] = [3, 4, 5]
+    corners[tids.index(7 * 1024 + 3)] = [INT4_MAX + 1, 0, 1]  # v1 - vbase = INT4_MAX + 1: wide
+    corners[tids.index(8 * 1024)] = [2**62, 2**62 + 1, 2**53]  # far apart: wide
+    corners[tids.index(8 * 1024 + 2)] = [2**62 + 2, 2**62 + 3, 2**62 + 4]
+    ids = np.array(tids, dtype=np.int64)
+    c = np.array(corners, dtype=np.int64)
+    _copy_rows(conn, "tri", "trgl", ["int8"] * 3, ids, [c[:, 0].tolist(), c[:, 1].tolist(), c[:, 2].tolist()])
+    conn.execute("SELECT tgsis.write_chunk_rows('trgl', 'pg_temp.tri')")
+    expected = encode(ids, {f"vrtxid{k + 1}": c[:, k] for k in range(3)}, TRGL)
+    assert expected.wide.tolist().count(True) == 2
+    assert _server_copy(conn, "trgl", TRGL) == to_copy(expected, 1, 0)
+    # vertices: odd doubles (NaN payloads, -0.0, subnormals, infinities), ids with holes up to 2**53
+    odd = np.array(
+        [
+            0x8000000000000000,
+            0x7FF8000000000123,
+            0xFFF80000DEADBEEF,
+            1,
+            0x000FFFFFFFFFFFFF,
+            0x7FF0000000000000,
+            0xFFF0000000000000,
+            0x7FF0000000000001,
+        ],
+        dtype=np.uint64,
+    ).view(np.float64)
+    vids = np.array([*range(0, 3000, 3), 2**31 - 1, 2**31, 2**31 + 1, 2**53, 2**53 + 1023], dtype=np.int64)
+    xyz = rng.normal(size=(len(vids), 3))
+    xyz[: len(odd), 0] = odd
+    xyz[-len(odd) :, 2] = odd
+    _copy_rows(conn, "vtx", "vrtx", ["float8"] * 3, vids, [xyz[:, 0].tolist(), xyz[:, 1].tolist(), xyz[:, 2].tolist()])
+    conn.execute("SELECT tgsis.write_chunk_rows('vrtx', 'pg_temp.vtx')")
+    expected = encode(vids, {a: xyz[:, k].copy() for k, a in enumerate("xyz")}, XYZ)
+    assert _server_copy(conn, "vrtx", XYZ) == to_copy(expected, 1, 0)
