@@ -157,3 +157,36 @@ def test_the_sql_writer_and_the_codec_write_the_same_bytes(conn: Conn) -> None:
     conn.execute("SELECT tgsis.write_chunk_rows('vrtx', 'pg_temp.vtx')")
     expected = encode(vids, {a: xyz[:, k].copy() for k, a in enumerate("xyz")}, XYZ)
     assert _server_copy(conn, "vrtx", XYZ) == to_copy(expected, 1, 0)
+
+
+def _sqlstate(conn: Conn, statement: str) -> str | None:
+    try:
+        with conn.transaction():
+            conn.execute(statement)
+    except psycopg.Error as exc:
+        return exc.sqlstate
+    return None
+
+
+@pytest.mark.parametrize(
+    ("table", "columns", "values"),
+    [
+        # a numeric corner was rounded (1.5 stored as 2) where the row table's bigint cannot hold 1.5
+        ("trgl", "geoid bigint, trglid bigint, vrtxid1 numeric, vrtxid2 bigint, vrtxid3 bigint", "(1, 0, 1.5, 3, 4)"),
+        # a numeric geoid: the chunk inserted under geoid 2, looked for under 1.5, five rounds, then 40001 "retry"
+        ("vrtx", "geoid numeric, vrtxid bigint, x float8, y float8, z float8", "(1.5, 0, 1, 2, 3)"),
+        # a text id: 42883 (no operator), not ours
+        ("vrtx", "geoid bigint, vrtxid text, x float8, y float8, z float8", "(1, '7', 1, 2, 3)"),
+        # a real coordinate: widened (0.1f is not 0.1): the caller's rows are not the row table's
+        ("vrtx", "geoid bigint, vrtxid bigint, x real, y float8, z float8", "(1, 0, 0.1, 2, 3)"),
+    ],
+)
+def test_writer_refuses_rows_of_other_types_by_name(conn: Conn, table: str, columns: str, values: str) -> None:
+    make_chunks(conn, (table,))
+    conn.execute(f"CREATE TEMP TABLE typed ({columns}, _delete boolean NOT NULL DEFAULT false)")
+    conn.execute(f"INSERT INTO typed SELECT *, false FROM (VALUES {values}) v")
+    conn.commit()
+    assert _sqlstate(conn, f"SELECT tgsis.write_chunk_rows('{table}', 'pg_temp.typed')") == "TG100"
+    assert conn.execute(
+        sql.SQL("SELECT count(*) FROM tgsis.{}").format(sql.Identifier(f"{table}_chunk"))
+    ).fetchone() == (0,)

@@ -26,7 +26,7 @@
 --    stays the same bit for bit is not written at all. A new chunk that a
 --    concurrent writer inserted meanwhile (its insert waited for it) is done
 --    again by step 1 for those chunks only, reading what it committed.
--- Refused by name: a p_rows without the row table's columns or _delete, a
+-- Refused by name: a p_rows without the row table's columns (of its types) or _delete, a
 -- NULL key, value or _delete, a negative id, a key twice (TG100), a row
 -- breaking a CHECK constraint of the row table (23514, as the table would).
 -- The callers take the objects' write locks and note the changed objects
@@ -89,16 +89,20 @@ BEGIN
     v_refs := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder);
     v_vals := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref') ORDER BY c.colorder);
 
-    -- p_rows: the row table's columns and _delete boolean
-    SELECT string_agg(quote_ident(c.name), ', ' ORDER BY c.colorder) INTO v_missing
+    -- p_rows: the row table's columns, of its types (a cast could round a numeric id, or move a row to
+    -- another key than the one checked and locked), and _delete boolean
+    SELECT string_agg(format('%I %s', c.name, format_type(s.atttypid, s.atttypmod)), ', ' ORDER BY c.colorder)
+      INTO v_missing
       FROM tgsis.chunk_columns(p_table) c
+      JOIN pg_attribute s ON s.attrelid = v_storage AND s.attname = c.name
      WHERE NOT EXISTS (SELECT FROM pg_attribute a WHERE a.attrelid = p_rows AND a.attname = c.name AND a.attnum > 0
-                                                   AND NOT a.attisdropped);
+                                                   AND NOT a.attisdropped AND a.atttypid = s.atttypid);
     IF v_missing IS NOT NULL OR NOT EXISTS (SELECT FROM pg_attribute a WHERE a.attrelid = p_rows AND a.attname = '_delete'
                                                                          AND a.atttypid = 'boolean'::regtype AND NOT a.attisdropped) THEN
         RAISE EXCEPTION 'the rows to write into tgsis.% lack columns', quote_ident(p_table)
             USING ERRCODE = 'TG100',
-                  DETAIL = format('%s needs the columns of tgsis.%I and _delete boolean; missing: %s.', p_rows, p_table,
+                  DETAIL = format('%s needs the columns of tgsis.%I, of its types, and _delete boolean; missing or of another type: %s.',
+                                  p_rows, p_table,
                                   concat_ws(', ', v_missing, CASE WHEN NOT EXISTS (
                                       SELECT FROM pg_attribute a WHERE a.attrelid = p_rows AND a.attname = '_delete'
                                                                    AND a.atttypid = 'boolean'::regtype AND NOT a.attisdropped)
