@@ -5,6 +5,8 @@ Each test here failed on main before its fix (or is marked xfail strict with the
 
 from __future__ import annotations
 
+import threading
+import time
 from typing import Any
 
 import numpy as np
@@ -190,3 +192,68 @@ def test_writer_refuses_rows_of_other_types_by_name(conn: Conn, table: str, colu
     assert conn.execute(
         sql.SQL("SELECT count(*) FROM tgsis.{}").format(sql.Identifier(f"{table}_chunk"))
     ).fetchone() == (0,)
+
+
+def _waits_for_a_lock(conn: Conn, pid: int) -> bool:
+    row = conn.execute("SELECT wait_event_type FROM pg_stat_activity WHERE pid = %s", (pid,)).fetchone()
+    conn.rollback()
+    return row is not None and row[0] == "Lock"
+
+
+def test_writer_reads_its_rows_once_checked_not_again_changed(db_dsn: str, conn: Conn) -> None:
+    """The writer checks its rows (NULLs, negative ids, keys twice) in one statement and writes them in later ones:
+    a table that other sessions write (or a view over one) changed in between. The writer waited for a chunk's
+    lock after the check; a key given twice meanwhile made the chunk's arrays one element too long (every later
+    id shifted: silently another surface). It now takes only a temporary table of the session (TG100 otherwise)."""
+    make_chunks(conn, ("vrtx",))
+    conn.execute("CREATE TABLE public.shared (LIKE tgsis.vrtx, _delete boolean NOT NULL DEFAULT false)")
+    conn.execute("INSERT INTO public.shared SELECT 1, i, i, -i, 0.5 + i, false FROM generate_series(0, 99) i")
+    conn.execute("CREATE VIEW public.shared_view AS SELECT * FROM public.shared")
+    conn.commit()
+    for name in ("public.shared", "public.shared_view"):
+        assert _sqlstate(conn, f"SELECT tgsis.write_chunk_rows('vrtx', '{name}')") == "TG100", name
+    # the same rows through a temporary table: written
+    conn.execute("CREATE TEMP TABLE mine AS SELECT * FROM public.shared")
+    assert conn.execute("SELECT tgsis.write_chunk_rows('vrtx', 'pg_temp.mine')").fetchone() == (1,)
+    conn.commit()
+    expected = sorted(vertices(range(0, 100), scale=1.0))
+    assert visible_vertices(conn) == expected
+
+    # why: a writer of the shared table, waiting for the chunk's lock after its check, wrote a key given twice
+    conn.execute("UPDATE public.shared SET x = x + 1000 WHERE vrtxid = 10")
+    conn.commit()
+    first = psycopg.connect(db_dsn)
+    second = psycopg.connect(db_dsn)
+    try:
+        first.execute("CREATE TEMP TABLE one AS SELECT * FROM public.shared WHERE vrtxid = 20")
+        first.execute("SELECT tgsis.write_chunk_rows('vrtx', 'pg_temp.one')")  # open: holds chunk 0's lock
+        pid = second.info.backend_pid
+        result: list[Any] = []
+
+        def run() -> None:
+            try:
+                result.append(second.execute("SELECT tgsis.write_chunk_rows('vrtx', 'public.shared')").fetchone())
+                second.commit()
+            except psycopg.Error as exc:
+                result.append(exc.sqlstate)
+                second.rollback()
+
+        worker = threading.Thread(target=run)
+        worker.start()
+        for _ in range(1200):
+            if not worker.is_alive() or _waits_for_a_lock(conn, pid):
+                break
+            time.sleep(0.05)
+        conn.execute("INSERT INTO public.shared VALUES (1, 10, -7, -7, -7, false)")  # vrtxid 10 twice
+        conn.commit()
+        first.commit()
+        worker.join(60)
+        assert result == ["TG100"]
+    finally:
+        first.close()
+        second.close()
+    assert visible_vertices(conn) == expected
+    layout = conn.execute(
+        "SELECT cardinality(x), cardinality(y), holes FROM tgsis.vrtx_chunk WHERE geoid = 1"
+    ).fetchall()
+    assert layout == [(100, 100, None)]

@@ -26,7 +26,9 @@
 --    stays the same bit for bit is not written at all. A new chunk that a
 --    concurrent writer inserted meanwhile (its insert waited for it) is done
 --    again by step 1 for those chunks only, reading what it committed.
--- Refused by name: a p_rows without the row table's columns (of its types) or _delete, a
+-- Refused by name: a p_rows that is not a temporary table of the session (it is read
+-- by several statements: another session could change it in between), or
+-- without the row table's columns (of its types) or _delete, a
 -- NULL key, value or _delete, a negative id, a key twice (TG100), a row
 -- breaking a CHECK constraint of the row table (23514, as the table would).
 -- The callers take the objects' write locks and note the changed objects
@@ -89,6 +91,15 @@ BEGIN
     v_refs := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder);
     v_vals := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref') ORDER BY c.colorder);
 
+    -- p_rows: a temporary table of this session, read by several statements (checks, locks, the write), so that
+    -- what was checked is what is written (a table other sessions write, or a view over one, changes in between)
+    IF NOT EXISTS (SELECT FROM pg_class c WHERE c.oid = p_rows AND c.relkind IN ('r', 'p') AND c.relpersistence = 't') THEN
+        RAISE EXCEPTION 'the rows to write into tgsis.% are not in a temporary table', quote_ident(p_table)
+            USING ERRCODE = 'TG100',
+                  DETAIL = format('%s is read by several statements; only a temporary table of this session cannot '
+                                  'change between them.', p_rows),
+                  HINT = 'copy the rows into a temporary table first';
+    END IF;
     -- p_rows: the row table's columns, of its types (a cast could round a numeric id, or move a row to
     -- another key than the one checked and locked), and _delete boolean
     SELECT string_agg(format('%I %s', c.name, format_type(s.atttypid, s.atttypmod)), ', ' ORDER BY c.colorder)
