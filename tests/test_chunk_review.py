@@ -14,7 +14,8 @@ import psycopg
 import pytest
 from psycopg import sql
 
-from tgsis._chunks import ChunkColumns, encode, to_copy
+from tgsis._chunks import ChunkColumns, encode, from_copy, to_copy
+from tgsis.errors import InvalidInputError
 
 Conn = psycopg.Connection[Any]
 
@@ -257,3 +258,47 @@ def test_writer_reads_its_rows_once_checked_not_again_changed(db_dsn: str, conn:
         "SELECT cardinality(x), cardinality(y), holes FROM tgsis.vrtx_chunk WHERE geoid = 1"
     ).fetchall()
     assert layout == [(100, 100, None)]
+
+
+def _select_stream(conn: Conn, select: str) -> bytes:
+    out = bytearray()
+    with conn.cursor().copy(f"COPY ({select}) TO STDOUT (FORMAT binary)") as copy:
+        for block in copy:
+            out += block
+    return bytes(out)
+
+
+_ONE = "NULL::smallint[], {0}::float8[], {0}::float8[], {0}::float8[]"
+_REFS = "NULL::smallint[], {0}, {1}::int[], '{{1,1}}'::int[], '{{2,2}}'::int[], {2}::bigint[], NULL::bigint[], NULL::bigint[]"
+REFUSED = {
+    # arrays the contract does not make: lower bound 0, two dimensions, in any column
+    "lower bound 0": (XYZ, "SELECT 0::bigint, " + _ONE.format("'[0:1]={1,2}'")),
+    "2-D": (XYZ, "SELECT 0::bigint, " + _ONE.format("'{{1,2},{3,4}}'")),
+    "2-D holes": (
+        XYZ,
+        "SELECT 0::bigint, '{{2}}'::smallint[], '{1,NULL,3}'::float8[], '{1,NULL,3}'::float8[], '{1,NULL,3}'::float8[]",
+    ),
+    "trailing NULL": (XYZ, "SELECT 0::bigint, " + _ONE.format("'{1,NULL}'")),
+    # accepted on main: arrays longer than a chunk (ids 1024.. of chunk 0 are chunk 1's: a chunk table of another
+    # chunksize, which the registry allows, read as 1024), a negative chunk, negative vertex ids
+    "1500 elements": (
+        XYZ,
+        "SELECT 0::bigint, NULL::smallint[], a, a, a "
+        "FROM (SELECT array_agg(i::float8) a FROM generate_series(1, 1500) i) s",
+    ),
+    "negative chunk": (XYZ, "SELECT -1::bigint, " + _ONE.format("'{1}'")),
+    "negative vbase": (TRGL, "SELECT 0::bigint, " + _REFS.format("-5::bigint", "'{0,1}'", "NULL")),
+    "negative wide id": (
+        TRGL,
+        "SELECT 0::bigint, NULL::smallint[], NULL::bigint, NULL::int[], NULL::int[], NULL::int[], '{-1}'::bigint[], "
+        "'{2}'::bigint[], '{3}'::bigint[]",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", sorted(REFUSED))
+def test_the_parser_refuses_server_arrays_that_break_the_contract(conn: Conn, case: str) -> None:
+    """Streams made by the server (COPY ... TO STDOUT (FORMAT binary) of crafted arrays), not by the codec."""
+    spec, select = REFUSED[case]
+    with pytest.raises(InvalidInputError):
+        from_copy(_select_stream(conn, select), spec)
