@@ -14,6 +14,7 @@ import psycopg
 import pytest
 from psycopg import sql
 
+import tgsis
 from tgsis._chunks import ChunkColumns, encode, from_copy, to_copy
 from tgsis.errors import InvalidInputError
 
@@ -325,3 +326,64 @@ def test_the_chunk_size_cannot_change_under_a_chunk_table(conn: Conn) -> None:
         conn.rollback()
         assert got == [(7.0,)]
     assert state is not None
+
+
+def test_writers_in_two_versions_of_one_chunk_keep_their_own_content(db_dsn: str, conn: Conn) -> None:
+    """Two versions (two working revisions) change the same chunk of the parent at once: each closes the parent's
+    version for itself (lastrevs gets both), each sees its own content; the parent keeps its own."""
+    tgsis.enable_feature_versioning(conn)
+    make_chunks(conn, ("vrtx",))
+    conn.execute(
+        "CREATE TEMP TABLE base AS SELECT 1::bigint AS geoid, i::bigint AS vrtxid, i::float8 AS x, "
+        "(-i)::float8 AS y, (0.5 + i)::float8 AS z, false AS _delete FROM generate_series(0, 99) i"
+    )
+    conn.execute("SELECT tgsis.write_chunk_rows('vrtx', 'pg_temp.base')")
+    conn.commit()
+    tgsis.create_version(conn, "one")
+    tgsis.create_version(conn, "two")
+    sessions = {name: psycopg.connect(db_dsn) for name in ("one", "two")}
+    try:
+        for name, session in sessions.items():
+            tgsis.goto_version(session, name)
+            session.execute(
+                "CREATE TEMP TABLE mine AS SELECT 1::bigint AS geoid, %s::bigint AS vrtxid, 999.0::float8 AS x, "
+                "9.0::float8 AS y, 9.0::float8 AS z, false AS _delete",
+                (10 if name == "one" else 20,),
+            )
+        one, two = sessions["one"], sessions["two"]
+        assert one.execute("SELECT tgsis.write_chunk_rows('vrtx', 'pg_temp.mine')").fetchone() == (1,)
+        result: list[Any] = []
+
+        def run() -> None:
+            try:
+                result.append(two.execute("SELECT tgsis.write_chunk_rows('vrtx', 'pg_temp.mine')").fetchone())
+                two.commit()
+            except psycopg.Error as exc:
+                result.append(exc.sqlstate)
+
+        worker = threading.Thread(target=run)
+        worker.start()
+        for _ in range(1200):
+            if not worker.is_alive() or _waits_for_a_lock(conn, two.info.backend_pid):
+                break
+            time.sleep(0.05)
+        one.commit()
+        worker.join(60)
+        assert result == [(1,)]
+        for name, session in sessions.items():
+            rows = session.execute(
+                "SELECT vrtxid, x FROM tgsis.vrtx_chunk_rows c WHERE x = 999 "
+                "AND (c.revision = ANY (tgsis.get_revisions(true))) IS TRUE AND NOT (c.lastrevs && tgsis.get_revisions(true))"
+            ).fetchall()
+            session.rollback()
+            assert rows == [(10 if name == "one" else 20, 999.0)], name
+    finally:
+        for session in sessions.values():
+            session.close()
+    parent = conn.execute(
+        "SELECT geoid, vrtxid, x, y, z FROM tgsis.vrtx_chunk_rows c WHERE (c.revision = ANY (tgsis.get_revisions(true))) "
+        "IS TRUE AND NOT (c.lastrevs && tgsis.get_revisions(true)) ORDER BY 1, 2"
+    ).fetchall()
+    assert [tuple(r) for r in parent] == sorted(vertices(range(0, 100), scale=1.0))
+    closed = conn.execute("SELECT cardinality(lastrevs) FROM tgsis.vrtx_chunk WHERE revclosed").fetchall()
+    assert closed == [(2,)]
