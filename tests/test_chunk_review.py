@@ -387,3 +387,17 @@ def test_writers_in_two_versions_of_one_chunk_keep_their_own_content(db_dsn: str
     assert [tuple(r) for r in parent] == sorted(vertices(range(0, 100), scale=1.0))
     closed = conn.execute("SELECT cardinality(lastrevs) FROM tgsis.vrtx_chunk WHERE revclosed").fetchall()
     assert closed == [(2,)]
+
+
+def test_the_decoded_face_reads_the_largest_ids(conn: Conn) -> None:
+    """id 2^63 - 1 is slot 1024 of chunk 2^53 - 1: (chunk << 10) + slot overflowed before the - 1 (22003)."""
+    make_chunks(conn, ("vrtx", "trgl"))
+    top = 2**63 - 1
+    ids = [0, 2**31 - 1, 2**31, 2**53, 2**62, top - 1, top]
+    _rows_table(conn, "mine", "vrtx", [(1, i, float(k), 0.0, -0.0) for k, i in enumerate(ids)])
+    conn.execute("SELECT tgsis.write_chunk_rows('vrtx', 'pg_temp.mine')")
+    assert [r[0] for r in conn.execute("SELECT vrtxid FROM tgsis.vrtx_chunk_rows ORDER BY 1").fetchall()] == ids
+    _rows_table(conn, "tri", "trgl", [(1, top, top - 2, top, top - 1), (1, 0, top, 0, 1)])
+    conn.execute("SELECT tgsis.write_chunk_rows('trgl', 'pg_temp.tri')")
+    got = conn.execute("SELECT trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.trgl_chunk_rows ORDER BY 1").fetchall()
+    assert got == [(0, top, 0, 1), (top, top - 2, top, top - 1)]
