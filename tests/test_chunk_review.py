@@ -401,3 +401,19 @@ def test_the_decoded_face_reads_the_largest_ids(conn: Conn) -> None:
     conn.execute("SELECT tgsis.write_chunk_rows('trgl', 'pg_temp.tri')")
     got = conn.execute("SELECT trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.trgl_chunk_rows ORDER BY 1").fetchall()
     assert got == [(0, top, 0, 1), (top, top - 2, top, top - 1)]
+
+
+def test_the_codec_takes_big_endian_doubles_bit_for_bit() -> None:
+    """A float64 column in big-endian order (a binary VTK or COPY buffer viewed as >f8) is float64: it was refused
+    ("must be float64, got >f8"); its bits (NaN payloads, a signalling NaN, -0.0, a subnormal) are kept."""
+    bits = np.array(
+        [0x7FF8000000000123, 0xFFF80000DEADBEEF, 0x7FF4000000000001, 0x8000000000000000, 1], dtype=np.uint64
+    )
+    native = bits.view(np.float64)
+    big = native.astype(">f8")
+    chunks = encode(np.arange(5, dtype=">i8"), {"x": big, "y": native, "z": big}, XYZ)
+    ids, cols = chunks.rows()
+    assert ids.tolist() == [0, 1, 2, 3, 4]
+    for name in "xyz":
+        assert cols[name].dtype == np.float64 and cols[name].view(np.uint64).tolist() == bits.tolist()
+    assert to_copy(chunks, 1) == to_copy(encode(np.arange(5), {c: native for c in "xyz"}, XYZ), 1)

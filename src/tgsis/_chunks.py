@@ -276,7 +276,7 @@ def encode(ids: npt.ArrayLike, columns: Mapping[str, npt.ArrayLike], spec: Chunk
             refs[name] = in_id_order(_int_ids(raw, f"column {name!r}"))
             continue
         kind = spec.kind(name)
-        if kind == "float8" and raw.size and raw.dtype != np.float64:
+        if kind == "float8" and raw.size and raw.dtype.newbyteorder("=") != np.float64:  # either byte order
             raise InvalidInputError(f"column {name!r} must be float64, got {raw.dtype}")
         if kind == "int8" and raw.size and raw.dtype.kind not in "iu":
             raise InvalidInputError(f"column {name!r} must be integers, got {raw.dtype}")
