@@ -417,3 +417,42 @@ def test_the_codec_takes_big_endian_doubles_bit_for_bit() -> None:
     for name in "xyz":
         assert cols[name].dtype == np.float64 and cols[name].view(np.uint64).tolist() == bits.tolist()
     assert to_copy(chunks, 1) == to_copy(encode(np.arange(5), {c: native for c in "xyz"}, XYZ), 1)
+
+
+@pytest.mark.parametrize(("table", "refs"), [("point", 1), ("segment", 2), ("tetra", 4)])
+def test_after_upserts_and_deletes_the_writer_s_chunks_are_the_codec_s_bytes(conn: Conn, table: str, refs: int) -> None:
+    """Three writes (inserts, moves of corners far away and back, deletes that empty slots, a chunk's last slot and a
+    whole chunk): the chunk rows are byte for byte what the codec encodes from the rows that remain."""
+    make_chunks(conn, (table,))
+    spec = ChunkColumns(tuple(f"vrtxid{k + 1}" for k in range(refs)), refs=tuple(f"vrtxid{k + 1}" for k in range(refs)))
+    ident = {"point": "pointid", "segment": "segid", "tetra": "tetraid"}[table]
+    rng = np.random.default_rng(refs)
+    state: dict[int, list[int]] = {}
+    for step in range(3):
+        ids = rng.choice(6000, size=2500, replace=False)
+        if step == 2:
+            ids = ids[(ids < 2048) | (ids >= 3072)]
+        corners = np.sort(rng.choice(2**20, size=(len(ids), refs)), axis=1) + np.arange(refs)  # distinct corners
+        far = rng.random(len(ids)) < (0.002 if step < 2 else 0.0)
+        corners[far, -1] += 2**33  # a few corners beyond int4 of their chunk: _wide, then back in the last write
+        deletes = [i for i in rng.choice(6000, size=800, replace=False).tolist() if i not in set(ids.tolist())]
+        if step == 2:
+            deletes = sorted({*deletes, *(i for i in state if 2048 <= i < 3072)})  # and a whole chunk
+        name = f"rows{step}"
+        conn.execute(
+            sql.SQL("CREATE TEMP TABLE {} (LIKE tgsis.{}, _delete boolean NOT NULL DEFAULT false)").format(
+                sql.Identifier(name), sql.Identifier(table)
+            )
+        )
+        with conn.cursor().copy(sql.SQL("COPY pg_temp.{} FROM STDIN").format(sql.Identifier(name))) as copy:
+            for i, c in zip(ids.tolist(), corners.tolist(), strict=True):
+                copy.write_row([1, i, *c, False])
+                state[i] = c
+            for i in deletes:
+                copy.write_row([1, i, *range(refs), True])
+                state.pop(i, None)
+        conn.execute("SELECT tgsis.write_chunk_rows(%s, %s::regclass)", (table, f"pg_temp.{name}"))
+        keys = np.array(sorted(state), dtype=np.int64)
+        values = np.array([state[int(k)] for k in keys], dtype=np.int64).reshape(len(keys), refs)
+        expected = encode(keys, {f"vrtxid{k + 1}": values[:, k] for k in range(refs)}, spec)
+        assert _server_copy(conn, table, spec) == to_copy(expected, 1, 0), (table, step, ident)
