@@ -456,3 +456,32 @@ def test_after_upserts_and_deletes_the_writer_s_chunks_are_the_codec_s_bytes(con
         values = np.array([state[int(k)] for k in keys], dtype=np.int64).reshape(len(keys), refs)
         expected = encode(keys, {f"vrtxid{k + 1}": values[:, k] for k in range(refs)}, spec)
         assert _server_copy(conn, table, spec) == to_copy(expected, 1, 0), (table, step, ident)
+
+
+def test_writer_called_in_odd_statement_shapes_and_settings(conn: Conn) -> None:
+    """From an SQL function, inside a CTE, with an empty search_path, extra columns in the rows, and settings that
+    change plans and text output (held on main)."""
+    make_chunks(conn, ("vrtx",))
+    conn.execute("CREATE TEMP TABLE extra (LIKE tgsis.vrtx, _delete boolean NOT NULL DEFAULT false, note text)")
+    conn.execute("INSERT INTO extra SELECT 1, i, i, 'NaN', '-0', false, 'x' FROM generate_series(0, 2999) i")
+    conn.execute(
+        "CREATE FUNCTION pg_temp.write_extra() RETURNS bigint LANGUAGE sql AS "
+        "$$ SELECT tgsis.write_chunk_rows('vrtx', 'pg_temp.extra') $$"
+    )
+    conn.execute("SET LOCAL search_path = ''")
+    conn.execute("SET LOCAL extra_float_digits = -15")
+    conn.execute(
+        "SET LOCAL enable_hashagg = off; SET LOCAL enable_hashjoin = off; SET LOCAL enable_sort = off; SET LOCAL jit = off"
+    )
+    assert conn.execute("SELECT pg_temp.write_extra()").fetchone() == (3,)
+    conn.execute("UPDATE pg_temp.extra SET x = -x, _delete = (vrtxid % 7 = 0)")
+    assert conn.execute(
+        "WITH w AS (SELECT tgsis.write_chunk_rows('vrtx', 'pg_temp.extra') AS n) SELECT n FROM w"
+    ).fetchone() == (3,)
+    kept = [i for i in range(3000) if i % 7]
+    got = conn.execute(
+        "SELECT count(*), sum(x) = %s, bool_and(float8send(y) = float8send('NaN')), "
+        "bool_and(float8send(z) = float8send('-0')) FROM tgsis.vrtx_chunk_rows",
+        (-float(sum(kept)),),
+    ).fetchone()
+    assert got == (len(kept), True, True, True)
