@@ -485,3 +485,58 @@ def test_writer_called_in_odd_statement_shapes_and_settings(conn: Conn) -> None:
         (-float(sum(kept)),),
     ).fetchone()
     assert got == (len(kept), True, True, True)
+
+
+@pytest.mark.parametrize("versioned", [False, True])
+def test_two_writers_of_the_same_slot_the_second_wins_and_nothing_else_moves(
+    db_dsn: str, conn: Conn, versioned: bool
+) -> None:
+    """Same slot, two sessions: the second waits for the first's lock, then reads what it committed and writes
+    over it, as two UPDATEs of one row would (no lost update of the other slots, one live version)."""
+    if versioned:
+        tgsis.enable_feature_versioning(conn)
+    make_chunks(conn, ("vrtx",))
+    _rows_table(conn, "base", "vrtx", vertices(range(0, 50), scale=1.0))
+    conn.execute("SELECT tgsis.write_chunk_rows('vrtx', 'pg_temp.base')")
+    conn.commit()
+    if versioned:
+        tgsis.create_version(conn, "child")
+    sessions = [psycopg.connect(db_dsn), psycopg.connect(db_dsn)]
+    try:
+        for k, session in enumerate(sessions):
+            if versioned:
+                tgsis.goto_version(session, "child")
+            _rows_table(session, "mine", "vrtx", [(1, 10, 100.0 + k, 0.0, 0.0), (1, 20 + k, 7.0, 7.0, 7.0)])
+        first, second = sessions
+        first.execute("SELECT tgsis.write_chunk_rows('vrtx', 'pg_temp.mine')")
+        result: list[Any] = []
+
+        def run() -> None:
+            try:
+                result.append(second.execute("SELECT tgsis.write_chunk_rows('vrtx', 'pg_temp.mine')").fetchone())
+                second.commit()
+            except psycopg.Error as exc:
+                result.append(exc.sqlstate)
+
+        worker = threading.Thread(target=run)
+        worker.start()
+        waited = False
+        for _ in range(1200):
+            waited = _waits_for_a_lock(conn, second.info.backend_pid)
+            if waited or not worker.is_alive():
+                break
+            time.sleep(0.05)
+        first.commit()
+        worker.join(60)
+        assert waited and result == [(1,)]
+        rows = second.execute(
+            "SELECT vrtxid, x FROM tgsis.vrtx_chunk_rows c WHERE (c.revision = ANY (tgsis.get_revisions(true))) IS TRUE "
+            "AND NOT (c.lastrevs && tgsis.get_revisions(true)) AND vrtxid IN (10, 20, 21) ORDER BY 1"
+        ).fetchall()
+        live = second.execute("SELECT count(*) FROM tgsis.vrtx_chunk WHERE NOT revclosed").fetchone()
+        second.rollback()
+    finally:
+        for session in sessions:
+            session.close()
+    assert rows == [(10, 101.0), (20, 7.0), (21, 7.0)]
+    assert live == (1,)
