@@ -44,7 +44,7 @@ BEGIN
         IF v_c.role = 'key' THEN
             v_select := v_select || format('c.%I', v_c.name);
         ELSIF v_c.role = 'chunk' THEN
-            v_select := v_select || format('(c.chunk << %s) + u.o - 1 AS %I', v_shift, v_c.name);
+            v_select := v_select || format('(c.chunk << %s) + (u.o - 1) AS %I', v_shift, v_c.name);  -- (u.o - 1) first: id 2^63 - 1 is slot 1024
         ELSIF v_c.role = 'float' THEN
             v_arrays := v_arrays || format('c.%I', v_c.name);
             v_alias := v_alias || quote_ident(v_c.name);

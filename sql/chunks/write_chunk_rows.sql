@@ -26,7 +26,9 @@
 --    stays the same bit for bit is not written at all. A new chunk that a
 --    concurrent writer inserted meanwhile (its insert waited for it) is done
 --    again by step 1 for those chunks only, reading what it committed.
--- Refused by name: a p_rows without the row table's columns or _delete, a
+-- Refused by name: a p_rows that is not a temporary table of the session (it is read
+-- by several statements: another session could change it in between), or
+-- without the row table's columns (of its types) or _delete, a
 -- NULL key, value or _delete, a negative id, a key twice (TG100), a row
 -- breaking a CHECK constraint of the row table (23514, as the table would).
 -- The callers take the objects' write locks and note the changed objects
@@ -58,7 +60,7 @@ DECLARE
     v_con      record;
     v_k        text[];    -- the chunk key's columns (quoted): the keys, then chunk
     v_parts    jsonb;
-    v_part     record;
+    v_rows     text;      -- p_rows schema-qualified: never read as one of the statement's CTEs (k, v, m...)
     v_lock     text;
     v_unlocked text;
     v_newk     text;      -- the chunk key of a p_rows row r
@@ -89,16 +91,29 @@ BEGIN
     v_refs := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder);
     v_vals := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref') ORDER BY c.colorder);
 
-    -- p_rows: the row table's columns and _delete boolean
-    SELECT string_agg(quote_ident(c.name), ', ' ORDER BY c.colorder) INTO v_missing
+    -- p_rows: a temporary table of this session, read by several statements (checks, locks, the write), so that
+    -- what was checked is what is written (a table other sessions write, or a view over one, changes in between)
+    IF NOT EXISTS (SELECT FROM pg_class c WHERE c.oid = p_rows AND c.relkind IN ('r', 'p') AND c.relpersistence = 't') THEN
+        RAISE EXCEPTION 'the rows to write into tgsis.% are not in a temporary table', quote_ident(p_table)
+            USING ERRCODE = 'TG100',
+                  DETAIL = format('%s is read by several statements; only a temporary table of this session cannot '
+                                  'change between them.', p_rows),
+                  HINT = 'copy the rows into a temporary table first';
+    END IF;
+    -- p_rows: the row table's columns, of its types (a cast could round a numeric id, or move a row to
+    -- another key than the one checked and locked), and _delete boolean
+    SELECT string_agg(format('%I %s', c.name, format_type(s.atttypid, s.atttypmod)), ', ' ORDER BY c.colorder)
+      INTO v_missing
       FROM tgsis.chunk_columns(p_table) c
+      JOIN pg_attribute s ON s.attrelid = v_storage AND s.attname = c.name
      WHERE NOT EXISTS (SELECT FROM pg_attribute a WHERE a.attrelid = p_rows AND a.attname = c.name AND a.attnum > 0
-                                                   AND NOT a.attisdropped);
+                                                   AND NOT a.attisdropped AND a.atttypid = s.atttypid);
     IF v_missing IS NOT NULL OR NOT EXISTS (SELECT FROM pg_attribute a WHERE a.attrelid = p_rows AND a.attname = '_delete'
                                                                          AND a.atttypid = 'boolean'::regtype AND NOT a.attisdropped) THEN
         RAISE EXCEPTION 'the rows to write into tgsis.% lack columns', quote_ident(p_table)
             USING ERRCODE = 'TG100',
-                  DETAIL = format('%s needs the columns of tgsis.%I and _delete boolean; missing: %s.', p_rows, p_table,
+                  DETAIL = format('%s needs the columns of tgsis.%I, of its types, and _delete boolean; missing or of another type: %s.',
+                                  p_rows, p_table,
                                   concat_ws(', ', v_missing, CASE WHEN NOT EXISTS (
                                       SELECT FROM pg_attribute a WHERE a.attrelid = p_rows AND a.attname = '_delete'
                                                                    AND a.atttypid = 'boolean'::regtype AND NOT a.attisdropped)
@@ -157,9 +172,11 @@ BEGIN
     END IF;
 
     -- the writing statement, from a template whose {parts} are made by format() from the column lists
+    SELECT format('%I.%I', s.nspname, c.relname) INTO v_rows
+      FROM pg_class c JOIN pg_namespace s ON s.oid = c.relnamespace WHERE c.oid = p_rows;
     v_k := ARRAY(SELECT quote_ident(k) FROM unnest(v_keys) AS k) || 'chunk'::text;
     v_parts := jsonb_build_object(
-        'rows', p_rows::text,
+        'rows', v_rows,
         'chunk', v_chunk::text,
         'vis', v_vis,
         'todo', format('($3::text[] IS NULL OR ROW(%s)::text = ANY ($3))', v_newk),
@@ -283,21 +300,23 @@ WITH k AS (
 SELECT (SELECT count(*) FROM (SELECT * FROM upd UNION SELECT * FROM del UNION SELECT * FROM cls UNION SELECT * FROM ins) w),
        ARRAY(SELECT ROW({n_K})::text FROM fresh n EXCEPT SELECT ROW({i_K})::text FROM ins i)
 $q$;
-    FOR v_part IN SELECT p.key, p.value FROM jsonb_each_text(v_parts) AS p ORDER BY length(p.key) DESC LOOP
-        v_sql := replace(v_sql, '{' || v_part.key || '}', v_part.value);
-    END LOOP;
+    -- one pass over the template: a part's text (a table's name may hold '{cc}') is never searched for placeholders
+    SELECT string_agg(CASE WHEN t.m[1] IS NULL THEN t.m[2] ELSE v_parts->>substr(t.m[1], 2, length(t.m[1]) - 2) END,
+                      '' ORDER BY t.o)
+      INTO v_sql
+      FROM regexp_matches(v_sql, '(\{[A-Za-z_]+\})|([^{]+|\{)', 'g') WITH ORDINALITY AS t(m, o);
     v_lock := format(
         'SELECT coalesce(array_agg(l.t), ''{}'') FROM (
            SELECT c.ctid AS t FROM %1$s c
             WHERE (%2$s) IN (SELECT %3$s FROM %4$s r WHERE ($3::text[] IS NULL OR ROW(%3$s)::text = ANY ($3)))
               AND %5$s AND c.ctid <> ALL ($4)
             ORDER BY %2$s FOR UPDATE OF c) l',
-        v_chunk, v_parts->>'c_K', v_newk, p_rows, v_vis);
+        v_chunk, v_parts->>'c_K', v_newk, v_rows, v_vis);
     v_unlocked := format(
         'SELECT EXISTS (SELECT FROM %1$s c
             WHERE (%2$s) IN (SELECT %3$s FROM %4$s r WHERE ($3::text[] IS NULL OR ROW(%3$s)::text = ANY ($3)))
               AND %5$s AND c.ctid <> ALL ($4))',
-        v_chunk, v_parts->>'c_K', v_newk, p_rows, v_vis);
+        v_chunk, v_parts->>'c_K', v_newk, v_rows, v_vis);
 
     LOOP
         v_round := v_round + 1;

@@ -276,7 +276,7 @@ def encode(ids: npt.ArrayLike, columns: Mapping[str, npt.ArrayLike], spec: Chunk
             refs[name] = in_id_order(_int_ids(raw, f"column {name!r}"))
             continue
         kind = spec.kind(name)
-        if kind == "float8" and raw.size and raw.dtype != np.float64:
+        if kind == "float8" and raw.size and raw.dtype.newbyteorder("=") != np.float64:  # either byte order
             raise InvalidInputError(f"column {name!r} must be float64, got {raw.dtype}")
         if kind == "int8" and raw.size and raw.dtype.kind not in "iu":
             raise InvalidInputError(f"column {name!r} must be integers, got {raw.dtype}")
@@ -520,6 +520,8 @@ def from_copy(payload: bytes, spec: ChunkColumns) -> ChunkSet:
         if reader.int(4) != 8:
             raise InvalidInputError("a chunk number is not a bigint")
         number = reader.int(8)
+        if number < 0:
+            raise InvalidInputError(f"a chunk number is negative ({number}): ids are 0 or more")
         k = len(chunks)
         chunks.append(number)
         length = reader.int(4)
@@ -531,6 +533,8 @@ def from_copy(payload: bytes, spec: ChunkColumns) -> ChunkSet:
             length = reader.int(4)
             if length == 8:
                 base = reader.int(8)
+                if base < 0:
+                    raise InvalidInputError(f"chunk {number}: vbase is negative ({base}): vertex ids are 0 or more")
             elif length != -1:
                 raise InvalidInputError(f"chunk {number}: vbase is not a bigint")
         is_wide = bool(refs) and base == -1
@@ -557,6 +561,11 @@ def from_copy(payload: bytes, spec: ChunkColumns) -> ChunkSet:
                 int(v) for v in np.frombuffer(reader.buf, dtype=">i4", count=5, offset=reader.pos)
             )
             if present is None:
+                if ndim == 1 and size > CHUNK_SIZE:
+                    raise InvalidInputError(
+                        f"chunk {number}: column {name} has {size} elements, more than the {CHUNK_SIZE} ids of a chunk "
+                        "(a chunk table of another chunk size?)"
+                    )
                 present = np.ones(max(size, 0) if ndim == 1 else 0, dtype=bool)
                 if len(holes):
                     if int(holes.min()) < 1 or int(holes.max()) >= len(present):
@@ -622,7 +631,7 @@ def from_copy(payload: bytes, spec: ChunkColumns) -> ChunkSet:
     relative = {r: sorted_slots(column((r, False), "int4", np.int32)) for r in refs}
     absolute = {r: sorted_slots(column((r, True), "int8", np.int64)) for r in refs}
     wide = np.array(wides, dtype=bool)
-    return ChunkSet(
+    result = ChunkSet(
         spec,
         chunk[order],
         lengths[order],
@@ -633,3 +642,8 @@ def from_copy(payload: bytes, spec: ChunkColumns) -> ChunkSet:
         relative,
         absolute,
     )
+    for r in refs:  # vertex ids are 0 or more: a negative one decoded is a chunk that breaks the contract
+        decoded = result._ref_values(r)
+        if decoded.size and int(decoded[result.present].min(initial=0)) < 0:
+            raise InvalidInputError(f"a chunk's column {r} decodes to a negative vertex id")
+    return result
