@@ -109,19 +109,22 @@ BEGIN
         'rcols', array_to_string(ARRAY(SELECT format('r.%I', c) FROM unnest(v_vals) AS c)
                                  || CASE WHEN v_versioned THEN ARRAY['r.revision', 'r.lastrevs'] ELSE '{}'::text[] END, ', '),
         'rvals', array_to_string(ARRAY(SELECT format('r.%I', c) FROM unnest(v_vals) AS c), ', '),
-        'fit', CASE WHEN cardinality(v_refs) = 0 THEN 'NULL::bigint AS vmin, true AS fits'
-                    ELSE format('min(least(%1$s)) AS vmin, '
-                                'coalesce(max(m.%2$I) - min(least(%1$s)) <= 2147483647%3$s, true) AS fits',
-                                array_to_string(ARRAY(SELECT format('m.%I', r) FROM unnest(v_refs) AS r), ', '), v_refs[1],
-                                coalesce((SELECT string_agg(format(' AND min(m.%1$I - m.%2$I) >= -2147483648'
-                                                                   ' AND max(m.%1$I - m.%2$I) <= 2147483647', r, v_refs[1]), '')
-                                            FROM unnest(v_refs[2:]) AS r), '')) END,
+        'wfit', CASE WHEN cardinality(v_refs) = 0 THEN 'NULL::bigint AS vmin, true AS fits'
+                     ELSE format('min(least(%1$s)) OVER a AS vmin, '
+                                 'coalesce(max(m.%2$I) OVER a - min(least(%1$s)) OVER a <= 2147483647%3$s, true) AS fits',
+                                 array_to_string(ARRAY(SELECT format('m.%I', r) FROM unnest(v_refs) AS r), ', '), v_refs[1],
+                                 coalesce((SELECT string_agg(format(' AND min(m.%1$I - m.%2$I) OVER a >= -2147483648'
+                                                                    ' AND max(m.%1$I - m.%2$I) OVER a <= 2147483647', r, v_refs[1]), '')
+                                             FROM unnest(v_refs[2:]) AS r), '')) END,
         'enc', array_to_string(
-            ARRAY(SELECT format('array_agg(m.%I ORDER BY s.slot) AS %I', f, f) FROM unnest(v_floats) AS f)
-            || ARRAY(SELECT format('CASE WHEN e.fits THEN array_agg(CASE WHEN e.fits THEN (m.%I - %s)::integer END ORDER BY s.slot) END AS %I',
-                                   r, CASE WHEN r = v_refs[1] THEN 'e.vmin' ELSE format('m.%I', v_refs[1]) END, r)
+            ARRAY(SELECT format('array_agg(CASE WHEN s.slot = m.slot THEN m.%1$I END ORDER BY s.slot) AS %1$I', f)
+                    FROM unnest(v_floats) AS f)
+            || ARRAY(SELECT format('CASE WHEN m.fits THEN array_agg(CASE WHEN m.fits AND s.slot = m.slot THEN (m.%I - %s)::integer END '
+                                   'ORDER BY s.slot) END AS %I',
+                                   r, CASE WHEN r = v_refs[1] THEN 'm.vmin' ELSE format('m.%I', v_refs[1]) END, r)
                      FROM unnest(v_refs) AS r)
-            || ARRAY(SELECT format('CASE WHEN NOT e.fits THEN array_agg(m.%I ORDER BY s.slot) END AS %I', r, r || '_wide')
+            || ARRAY(SELECT format('CASE WHEN NOT m.fits THEN array_agg(CASE WHEN s.slot = m.slot THEN m.%1$I END ORDER BY s.slot) END AS %2$I',
+                                   r, r || '_wide')
                      FROM unnest(v_refs) AS r), ', '),
         'inscols', array_to_string(v_k || ARRAY['revision', 'lastrevs', 'holes']
                                    || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['vbase'] ELSE '{}'::text[] END
@@ -153,15 +156,14 @@ WITH sets AS MATERIALIZED (
     SELECT {e_K}, e.w, r.slot, {rvals}
       FROM ev e JOIN rk r ON {match_r_e}
      WHERE {vis}
-), e AS (
-    SELECT {m_K}, m.w, max(m.slot) AS last, {fit}
-      FROM m GROUP BY {m_K}, m.w
-), n AS (
-    SELECT {e_K}, e.w, CASE WHEN e.fits THEN e.vmin END AS vbase,
-           array_agg(s.slot::smallint ORDER BY s.slot) FILTER (WHERE m.slot IS NULL) AS holes, {enc}
-      FROM e CROSS JOIN LATERAL generate_series(1, e.last::integer) AS s(slot)
-      LEFT JOIN m ON {match_m_e} AND m.w = e.w AND m.slot = s.slot
-     GROUP BY {e_K}, e.w, e.vmin, e.fits
+), g AS (  -- each row with the slot before it in its chunk version, and the chunk version's vbase and fit
+    SELECT m.*, lag(m.slot, 1, 0::bigint) OVER (PARTITION BY {m_K}, m.w ORDER BY m.slot) AS prev, {wfit}
+      FROM m WINDOW a AS (PARTITION BY {m_K}, m.w)
+), n AS (  -- each row expands to the holes before it and itself: slots 1 .. last, no join
+    SELECT {m_K}, m.w, CASE WHEN m.fits THEN m.vmin END AS vbase,
+           array_agg(s.slot::smallint ORDER BY s.slot) FILTER (WHERE s.slot < m.slot) AS holes, {enc}
+      FROM g m CROSS JOIN LATERAL generate_series(m.prev + 1, m.slot) AS s(slot)
+     GROUP BY {m_K}, m.w, m.vmin, m.fits
 )
 INSERT INTO {chunk} ({inscols})
 SELECT {insvals} FROM n JOIN l ON {match_n_l} AND l.w = n.w
