@@ -665,3 +665,54 @@ def test_writer_refuses_a_transaction_above_read_committed(conn: Conn) -> None:
     assert refused.value.sqlstate == "TG300"
     conn.rollback()
     assert _write(conn, "vrtx", _vertices([0])) == 1
+
+
+@pytest.mark.parametrize("table", list(MODEL1))
+def test_every_model1_table_round_trips_through_the_writer(conn: Conn, table: str) -> None:
+    _make_chunks(conn, [table])
+    ident, refs = MODEL1[table]
+    rng = np.random.default_rng(len(table))
+    ids = rng.choice(6000, size=2500, replace=False) + np.int64(2**32)
+    rows: list[tuple[Any, ...]] = []
+    for i in ids.tolist():
+        if refs:
+            # distinct corners near 3 * id, and in the chunk of ids 2**32 + 2048.. one far corner each (_wide)
+            corners = [3 * i + k for k in range(len(refs))]
+            if (i - 2**32) >> 10 == 2 and len(refs) > 1:
+                corners[-1] = 7
+            rows.append((1, i, *corners))
+        else:
+            rows.append((1, i, *rng.standard_normal(3).tolist()))
+    assert _write(conn, table, rows) == len({i >> 10 for i in ids.tolist()})
+    assert _visible(conn, table) == sorted(rows)
+    wide = (
+        conn.execute(
+            sql.SQL("SELECT chunk FROM tgsis.{} WHERE vbase IS NULL ORDER BY 1").format(
+                sql.Identifier(f"{table}_chunk")
+            )
+        ).fetchall()
+        if refs
+        else []
+    )
+    assert wide == ([((2**32 >> 10) + 2,)] if len(refs) > 1 else [])
+    # half of them deleted, the rest moved: the same rows as a row table would hold
+    gone = [(1, i) for i in ids[::2].tolist()]
+    kept = {r[1]: r for r in rows if r[1] not in {g[1] for g in gone}}
+    moved = [(r[0], r[1], *(v + 1 for v in r[2:])) for r in list(kept.values())[::3]]
+    kept.update({r[1]: r for r in moved})
+    _write(conn, table, moved, gone)
+    assert _visible(conn, table) == sorted(kept.values())
+    # the layout: holes below the last present slot only, arrays ending at a present slot
+    first = (
+        sql.SQL("x")
+        if not refs
+        else sql.SQL("coalesce({}::bigint[], {})").format(sql.Identifier(refs[0]), sql.Identifier(f"{refs[0]}_wide"))
+    )
+    bad = conn.execute(
+        sql.SQL(
+            "SELECT count(*) FROM (SELECT holes, {} AS a FROM tgsis.{}) c "
+            "WHERE a[cardinality(a)] IS NULL OR holes[cardinality(holes)] >= cardinality(a) "
+            "OR coalesce(cardinality(holes), 0) <> (SELECT count(*) FROM unnest(a) AS u(v) WHERE v IS NULL)"
+        ).format(first, sql.Identifier(f"{table}_chunk"))
+    ).fetchone()
+    assert bad == (0,)

@@ -60,7 +60,7 @@ CREATE TABLE tgsis.model_tables (
     -- and a block size, a power of two; one stored as rows has neither, nor ref columns
     CONSTRAINT model_tables_chunks CHECK ((chunkcolumn IS NULL) = (chunksize IS NULL)
                                           AND (chunkcolumn IS NOT NULL OR chunkrefs = '{}')
-                                          AND (chunksize IS NULL OR (chunksize BETWEEN 64 AND 65536
+                                          AND (chunksize IS NULL OR (chunksize >= 64 AND chunksize <= 65536
                                                                      AND chunksize & (chunksize - 1) = 0)))
 );
 
