@@ -183,6 +183,11 @@ def test_unversioned_rows_become_one_chunk_version_each_with_holes_and_back(conn
         (other, big),
     ).fetchall()
     assert [bytes(b[0]) for b in bits] == [struct.pack(">Q", p) for p in patterns]
+    # unversioned storage holds open chunk versions of revision 0 only: another is a difference
+    for stray in ("revision = 5", "lastrevs = '{5}'"):
+        with conn.transaction(force_rollback=True):
+            conn.execute(f"UPDATE tgsis.vrtx_chunk SET {stray} WHERE geoid = %s", (geoid,))
+            assert _sqlstate(conn, "SELECT tgsis.check_chunk_conversion('vrtx')")[0] == "TG000", stray
     before = {t: _chunk_rows(conn, t) for t in MODEL1}
     rows_before = {t: _row_view(conn, t) for t in MODEL1}
     # and back: into the emptied plain storage, then into chunks again

@@ -7,7 +7,8 @@
 -- what goto_revision shows), the rows visible in it (revision in the set,
 -- lastrevs meeting none of it) against the chunk versions visible in it,
 -- decoded by tgsis.<table>_chunk_rows; unversioned storage: every row against
--- the chunk versions of revision 0 that are not closed. Row for row with
+-- every chunk version, which must be open and of revision 0 (any other
+-- shows as a difference). Row for row with
 -- duplicates (EXCEPT ALL both ways: a set seeing two chunk versions of one
 -- chunk shows a key twice), value for value: doubles by their bits
 -- (float8send: -0.0, NaN payloads), ids and keys as they are. Raises TG000
@@ -31,6 +32,8 @@ DECLARE
     v_sets     text;
     v_rvis     text;
     v_cvis     text;
+    v_rextra   text := '';  -- unversioned: the revision and lastrevs a chunk version must have, against its own
+    v_cextra   text := '';
     v_bad      record;
 BEGIN
     SELECT * INTO v_reg FROM tgsis.model_tables t WHERE t.tablename = p_table;
@@ -57,18 +60,20 @@ BEGIN
     ELSE
         v_sets := 'SELECT ''the unversioned storage''::text AS label, ARRAY[0] AS revs';
         v_rvis := 'true';
-        v_cvis := 'r.revision = 0 AND NOT r.revclosed';
+        v_cvis := 'true';  -- every chunk version counts: unversioned storage has only open ones of revision 0
+        v_rextra := ', 0 AS revision, ''{}''::integer[] AS lastrevs';
+        v_cextra := ', r.revision, r.lastrevs';
     END IF;
     EXECUTE format(
         'WITH s AS MATERIALIZED (%1$s),
-              rw AS (SELECT s.label, %2$s FROM s CROSS JOIN %3$s r WHERE %4$s),
-              ch AS (SELECT s.label, %2$s FROM s CROSS JOIN %5$s r WHERE %6$s),
+              rw AS (SELECT s.label, %2$s%11$s FROM s CROSS JOIN %3$s r WHERE %4$s),
+              ch AS (SELECT s.label, %2$s%12$s FROM s CROSS JOIN %5$s r WHERE %6$s),
               d AS ((SELECT * FROM rw EXCEPT ALL SELECT * FROM ch) UNION ALL (SELECT * FROM ch EXCEPT ALL SELECT * FROM rw))
          SELECT d.label, concat_ws(%7$L, %8$s) AS object, d.%9$I >> %10$s AS chunk, count(*) OVER () AS n FROM d
           ORDER BY 2, 3, 1 LIMIT 1',
         v_sets, v_cols, v_storage, v_rvis, v_view, v_cvis, ', ',
         (SELECT string_agg(format('%L || d.%I', k || ' ', k), ', ') FROM unnest(v_keys) AS k),
-        v_reg.chunkcolumn, v_shift) INTO v_bad;
+        v_reg.chunkcolumn, v_shift, v_rextra, v_cextra) INTO v_bad;
     IF v_bad.label IS NOT NULL THEN
         RAISE EXCEPTION 'the chunks of tgsis.% differ from its rows: object %, chunk %, in %', quote_ident(p_table),
                         v_bad.object, v_bad.chunk, v_bad.label
@@ -83,4 +88,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.check_chunk_conversion(text) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.check_chunk_conversion(text) IS
-    'raise TG000 (naming table, object, chunk and set) unless, for every version''s working set and every revision''s stored set (unversioned storage: revision 0), the decoded chunks of tgsis.<table>_chunk equal the rows of the row storage visible in it, row for row and value for value (doubles by float8send)';
+    'raise TG000 (naming table, object, chunk and set) unless, for every version''s working set and every revision''s stored set (unversioned storage: every row against every chunk version), the decoded chunks of tgsis.<table>_chunk equal the rows of the row storage visible in it, row for row and value for value (doubles by float8send)';

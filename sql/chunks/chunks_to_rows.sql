@@ -6,8 +6,8 @@
 -- the sets its chunk version is. Rows a chunk's versions share are repeated
 -- per version (more rows than a history of rows would hold; compress_versions
 -- does not merge them); rows -> chunks -> rows -> chunks gives the same
--- chunks. Unversioned storage takes the open chunk versions of revision 0 (the
--- only ones it has). Into an EMPTY row storage only (TG201 otherwise: the
+-- chunks. Unversioned storage takes every chunk version (it has open ones of
+-- revision 0 only; two versions of a key fail its primary key, 23505). Into an EMPTY row storage only (TG201 otherwise: the
 -- keys would mix), after locking both tables; verified by
 -- tgsis.check_chunk_conversion (TG000: the caller's transaction changes
 -- nothing). The row storage's triggers fire as for any insert. Returns the
@@ -53,7 +53,7 @@ BEGIN
         EXECUTE format('INSERT INTO %1$s (%2$s, revision, lastrevs) SELECT %2$s, revision, lastrevs FROM %3$s',
                        v_storage, v_cols, v_view);
     ELSE
-        EXECUTE format('INSERT INTO %1$s (%2$s) SELECT %2$s FROM %3$s WHERE revision = 0 AND NOT revclosed',
+        EXECUTE format('INSERT INTO %1$s (%2$s) SELECT %2$s FROM %3$s',
                        v_storage, v_cols, v_view);
     END IF;
     GET DIAGNOSTICS v_n = ROW_COUNT;
@@ -65,4 +65,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.chunks_to_rows(text) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.chunks_to_rows(text) IS
-    'write every chunk version of tgsis.<table>_chunk into the empty row storage (TG201 otherwise): one row per present slot with the chunk version''s revision and lastrevs (unversioned: the open versions of revision 0), so visibility is kept exactly; verified by tgsis.check_chunk_conversion (TG000); returns the rows written';
+    'write every chunk version of tgsis.<table>_chunk into the empty row storage (TG201 otherwise): one row per present slot with the chunk version''s revision and lastrevs (unversioned: every chunk version, its key once), so visibility is kept exactly; verified by tgsis.check_chunk_conversion (TG000); returns the rows written';
