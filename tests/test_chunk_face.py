@@ -245,3 +245,200 @@ def test_plain_storage_writes_in_revision_0_and_refuses_another_version(conn: Co
     tgsis.create_version(conn, "child")
     tgsis.goto_version(conn, "child")
     assert _sqlstate(conn, "UPDATE tgsis.vrtx_face SET x = 1 WHERE geoid = %s", (geoid,)) == "TG305"
+
+
+def _waits_for_a_lock(conn: Conn, pid: int) -> bool:
+    row = conn.execute("SELECT wait_event_type FROM pg_stat_activity WHERE pid = %s", (pid,)).fetchone()
+    conn.rollback()
+    return row is not None and row[0] == "Lock"
+
+
+def _second_waits(
+    conn: Conn, first: Conn, second: Conn, statement: str, params: Sequence[Any], wait: bool
+) -> list[Any]:
+    """Run ``statement`` in ``second`` while ``first`` holds its write open; commit ``first`` once it waits (or
+    once it is done, when ``wait`` is false)."""
+    result: list[Any] = []
+
+    def run() -> None:
+        try:
+            second.execute(statement, params)
+            second.commit()
+            result.append("ok")
+        except psycopg.Error as exc:
+            second.rollback()
+            result.append(exc.sqlstate)
+
+    worker = threading.Thread(target=run)
+    worker.start()
+    deadline = time.monotonic() + 60
+    if not wait:
+        worker.join(60)
+    while wait and not _waits_for_a_lock(conn, second.info.backend_pid):
+        assert worker.is_alive() and time.monotonic() < deadline, result
+        time.sleep(0.05)
+    first.commit()
+    worker.join(60)
+    return result
+
+
+def test_two_sessions_through_the_face_keep_both_slots_and_refuse_a_lost_update_as_today_s_view(
+    db_dsn: str, conn: Conn
+) -> None:
+    tgsis.enable_feature_versioning(conn)
+    geoid = _feature(conn)
+    _faces(conn)
+    _write(conn, "vrtx", _vertices(range(100), geoid=geoid))
+    conn.commit()
+    tgsis.create_version(conn, "child")
+    outcomes: dict[str, list[Any]] = {}
+    for view in ("vrtx_face", "vrtx"):
+        for case, second_id in (("different", 2), ("same", 1)):
+            first = psycopg.connect(db_dsn)
+            second = psycopg.connect(db_dsn)
+            try:
+                for session in (first, second):
+                    tgsis.goto_version(session, "child")
+                update = sql.SQL("UPDATE tgsis.{} SET z = z + 1 WHERE geoid = %s AND vrtxid = %s").format(
+                    sql.Identifier(view)
+                )
+                assert first.execute(update, (geoid, 1)).rowcount == 1  # open: holds the chunk (or row)
+                outcomes[f"{view} {case}"] = _second_waits(
+                    conn,
+                    first,
+                    second,
+                    update.as_string(conn),
+                    (geoid, second_id),
+                    view == "vrtx_face" or case == "same",
+                )
+            finally:
+                first.close()
+                second.close()
+    # today's view of rows: a different row is written at once, the same row is 40001 after the wait; the face
+    # waits for the chunk's lock in both cases, then writes the different slot and refuses the same one
+    assert outcomes == {
+        "vrtx different": ["ok"],
+        "vrtx same": ["40001"],
+        "vrtx_face different": ["ok"],
+        "vrtx_face same": ["40001"],
+    }
+    tgsis.goto_version(conn, "child")
+    face = dict((r[1], r[4]) for r in _face(conn))
+    # vertex 1 once per view (the face's first case and second case: +1 twice for vrtx_face, the 40001 wrote nothing)
+    assert face[1] == 1.5 + 2 and face[2] == 2.5 + 1 and face[3] == 3.5
+    # one chunk version written by the child (the second writer rewrote it in place); DEFAULT's closed there
+    assert conn.execute(
+        "SELECT count(*) FROM tgsis.vrtx_chunk WHERE NOT revclosed AND geoid = %s", (geoid,)
+    ).fetchone() == (1,)
+
+
+def test_roles_with_fewer_rights(db_dsn: str, conn: Conn) -> None:
+    alpha = _feature(conn, "alpha")
+    beta = _feature(conn, "beta")
+    conn.execute("REVOKE ALL ON beta FROM tgsis_reader, tgsis_editor, tgsis_admin, PUBLIC")
+    conn.commit()
+    _faces(conn)
+    _write(conn, "vrtx", [*_vertices(range(10), geoid=alpha), *_vertices(range(4), geoid=beta)])
+    conn.commit()
+    with login_roles(db_dsn, {"reader": "tgsis_reader", "editor": "tgsis_editor"}) as roles:
+        reader = roles.connect("reader")
+        assert {r[0] for r in reader.execute("SELECT geoid FROM tgsis.vrtx_face").fetchall()} == {alpha}
+        assert reader.execute("SELECT * FROM tgsis.vertex(%s, 1)", (alpha,)).fetchall() == [(1.0, -1.0, 1.5)]
+        assert reader.execute("SELECT * FROM tgsis.vertex(%s, 1)", (beta,)).fetchall() == []
+        assert reader.execute("SELECT * FROM tgsis.vertices(%s, '{0, 1}')", (beta,)).fetchall() == []
+        # a function of the reader's query sees no row of the class first (security barrier)
+        reader.execute(
+            "CREATE FUNCTION pg_temp.peek(bigint) RETURNS boolean LANGUAGE plpgsql COST 0.0001 AS "
+            "$$ BEGIN RAISE NOTICE 'saw %', $1; RETURN true; END $$"
+        )
+        seen: list[str] = []
+        reader.add_notice_handler(lambda d: seen.append(d.message_primary or ""))
+        reader.execute("SELECT * FROM tgsis.vrtx_face WHERE pg_temp.peek(geoid)").fetchall()
+        assert f"saw {beta}" not in seen and f"saw {alpha}" in seen
+        reader.rollback()
+        for statement in (
+            f"INSERT INTO tgsis.vrtx_face VALUES ({alpha}, 50, 0, 0, 0)",
+            f"UPDATE tgsis.vrtx_face SET x = 0 WHERE geoid = {alpha}",
+            f"DELETE FROM tgsis.vrtx_face WHERE geoid = {alpha}",
+        ):
+            assert _sqlstate(reader, statement) == "42501", statement
+        editor = roles.connect("editor")
+        assert (
+            editor.execute("UPDATE tgsis.vrtx_face SET x = 7 WHERE geoid = %s AND vrtxid < 2", (alpha,)).rowcount == 2
+        )
+        editor.commit()
+        # the revoked class: not seen, so not updated; an insert is refused as today's table refuses it
+        assert editor.execute("UPDATE tgsis.vrtx_face SET x = 7 WHERE geoid = %s", (beta,)).rowcount == 0
+        face = _sqlstate(editor, f"INSERT INTO tgsis.vrtx_face VALUES ({beta}, 50, 0, 0, 0)")
+        today = _sqlstate(editor, f"INSERT INTO tgsis.vrtx VALUES ({beta}, 50, 0, 0, 0)")
+        assert face == "42501" and today == "42501", (face, today)
+        editor.rollback()
+    assert [r[2] for r in _face(conn) if r[0] == alpha][:3] == [7.0, 7.0, 2.0]
+    assert [r for r in _face(conn) if r[0] == beta] == _vertices(range(4), geoid=beta)
+
+
+# --------------------------------------------------------------------------- keyed reads
+
+
+def test_keyed_reads_read_today_s_rows_then_the_chunks_by_key(conn: Conn) -> None:
+    tgsis.enable_feature_versioning(conn)
+    geoid = _feature(conn)
+    # before the switch: today's rows (the triangle's three vertices), in the order asked, absent ids left out
+    eye = [(1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0)]
+    assert conn.execute("SELECT * FROM tgsis.vertex(%s, 1)", (geoid,)).fetchall() == [eye[1]]
+    assert conn.execute("SELECT * FROM tgsis.vertex(%s, 9)", (geoid,)).fetchall() == []
+    assert conn.execute("SELECT * FROM tgsis.vertices(%s, '{2, 0, 9, -1, 1, 2}')", (geoid,)).fetchall() == [
+        (i, *eye[i]) for i in (2, 0, 1, 2)
+    ]
+    # the chunks, once tgsis.vrtx_chunk exists: their content (other values than the rows'), versioned
+    _faces(conn)
+    ids = [0, 1, 2, 1023, 1024, 5000, 2**33 + 7]
+    _write(conn, "vrtx", _vertices(ids, geoid=geoid, scale=3.0))
+    conn.commit()
+    tgsis.create_version(conn, "child")
+    tgsis.goto_version(conn, "child")
+    conn.execute("UPDATE tgsis.vrtx_face SET x = -1 WHERE geoid = %s AND vrtxid = 1024", (geoid,))
+    conn.commit()
+    want = {r[1]: r[2:] for r in _vertices(ids, geoid=geoid, scale=3.0)}
+    child = {**want, 1024: (-1.0, *want[1024][1:])}
+    asked = [5000, 2**33 + 7, 3, 1024, -5, 0, 1023, 2**33 + 8, 0]
+    for version, expected in (("child", child), ("DEFAULT", want)):
+        tgsis.goto_version(conn, version)
+        got = conn.execute("SELECT * FROM tgsis.vertices(%s, %s)", (geoid, asked)).fetchall()
+        assert got == [(i, *expected[i]) for i in asked if i in expected], version
+        for i in asked:
+            one = conn.execute("SELECT * FROM tgsis.vertex(%s, %s)", (geoid, i)).fetchall()
+            assert one == ([expected[i]] if i in expected else []), (version, i)
+            # the same as the face's row
+            assert one == [r[2:] for r in _face(conn, where=f"WHERE geoid = {geoid} AND vrtxid = {i}")]
+    # the functions' labels: public, STABLE, PARALLEL SAFE, the caller's rights
+    labels = conn.execute(
+        "SELECT proname, provolatile, proparallel, prosecdef, has_function_privilege('public', oid, 'EXECUTE') "
+        "FROM pg_proc WHERE oid IN ('tgsis.vertex(bigint, bigint)'::regprocedure, "
+        "'tgsis.vertices(bigint, bigint[])'::regprocedure) ORDER BY 1"
+    ).fetchall()
+    assert labels == [("vertex", "s", "s", False, True), ("vertices", "s", "s", False, True)]
+
+
+def test_tgsis_vertex_reads_one_chunk(conn: Conn) -> None:
+    _faces(conn)
+    # 60 objects of 10 chunks (a few vertices each), one of them full: a table the planner reads by key
+    rows = [
+        r for geoid in range(1, 61) for r in _vertices([k * 1024 + j for k in range(10) for j in (0, 700)], geoid=geoid)
+    ]
+    _write(conn, "vrtx", [r for r in rows if r[0] != 2] + _vertices(range(0, 8000), geoid=2))
+    conn.commit()
+    conn.execute("ANALYZE tgsis.vrtx_chunk")
+    conn.commit()
+    # the statement tgsis.vertex runs, planned: the primary key's index, one chunk
+    conn.execute("LOAD 'auto_explain'")
+    conn.execute("SET auto_explain.log_min_duration = 0; SET auto_explain.log_nested_statements = on")
+    conn.execute("SET auto_explain.log_analyze = on; SET client_min_messages = log")
+    plans: list[str] = []
+    conn.add_notice_handler(lambda d: plans.append(d.message_primary or ""))
+    assert conn.execute("SELECT * FROM tgsis.vertex(2, 5000)").fetchall() == [(5000.0, -5000.0, 5000.5)]
+    inner = [p for p in plans if "vrtx_chunk" in p]
+    assert len(inner) == 1, plans
+    assert "Index Scan using vrtx_chunk_pkey" in inner[0] and "rows=1 loops=1" in inner[0], inner[0]
+    assert "Seq Scan" not in inner[0], inner[0]
+    conn.rollback()
