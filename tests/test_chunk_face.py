@@ -442,3 +442,52 @@ def test_tgsis_vertex_reads_one_chunk(conn: Conn) -> None:
     assert "Index Scan using vrtx_chunk_pkey" in inner[0] and "rows=1 loops=1" in inner[0], inner[0]
     assert "Seq Scan" not in inner[0], inner[0]
     conn.rollback()
+
+
+# --------------------------------------------------------------------------- measured (printed, no assert on time)
+
+
+def _ms(conn: Conn, statement: str, params: Sequence[Any] = (), runs: int = 5) -> float:
+    times = []
+    for _ in range(runs):
+        start = time.perf_counter()
+        conn.execute(statement, params).fetchall()
+        times.append(time.perf_counter() - start)
+    return sorted(times)[len(times) // 2] * 1000
+
+
+def test_measure_one_vertex_by_key_and_a_10k_row_update_on_a_1m_vertex_object(conn: Conn) -> None:
+    tgsis.enable_feature_versioning(conn)
+    _faces(conn)
+    conn.execute(
+        "CREATE TEMP TABLE big AS SELECT 1::bigint AS geoid, i AS vrtxid, i::float8 AS x, -i::float8 AS y, "
+        "0.5::float8 AS z, false AS _delete FROM generate_series(0::bigint, 999999) AS i"
+    )
+    conn.execute("SELECT tgsis.write_chunk_rows('vrtx', 'pg_temp.big')")
+    conn.commit()
+    conn.execute("ANALYZE tgsis.vrtx_chunk")
+    conn.commit()
+    key = 654_321
+    want = [(float(key), -float(key), 0.5)]
+    assert (
+        conn.execute("SELECT x, y, z FROM tgsis.vrtx_face WHERE geoid = 1 AND vrtxid = %s", (key,)).fetchall() == want
+    )
+    assert conn.execute("SELECT * FROM tgsis.vertex(1, %s)", (key,)).fetchall() == want
+    face = _ms(conn, "SELECT x, y, z FROM tgsis.vrtx_face WHERE geoid = 1 AND vrtxid = %s", (key,))
+    function = _ms(conn, "SELECT * FROM tgsis.vertex(1, %s)", (key,), runs=21)
+    many = _ms(conn, "SELECT * FROM tgsis.vertices(1, %s)", (list(range(0, 1_000_000, 1000)),), runs=5)
+    print(f"\none vertex by key, 1M-vertex object: through the face {face:.1f} ms, tgsis.vertex {function:.2f} ms")
+    print(f"tgsis.vertices of 1,000 ids in 977 chunks: {many:.1f} ms")
+    # a 10k-row UPDATE through the face: queued by the row trigger, written by one call of the writer at the end
+    start = time.perf_counter()
+    updated = conn.execute("UPDATE tgsis.vrtx_face SET z = z + 1 WHERE geoid = 1 AND vrtxid < 10000").rowcount
+    conn.commit()
+    print(f"10,000-row UPDATE through the face (10 chunks): {(time.perf_counter() - start) * 1000:.0f} ms")
+    assert updated == 10_000
+    assert conn.execute(
+        "SELECT count(*), min(z), max(z) FROM tgsis.vrtx_face WHERE geoid = 1 AND vrtxid < 10010"
+    ).fetchone() == (
+        10_010,
+        0.5,
+        1.5,
+    )

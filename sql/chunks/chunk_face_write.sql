@@ -87,7 +87,29 @@ BEGIN
     v_cc := v_reg.chunkcolumn;
     v_mask := v_reg.chunksize - 1;
     v_shift := round(log(2, v_reg.chunksize))::integer;
-    v_keycols := ARRAY(SELECT c.name FROM tgsis.chunk_columns(v_table) c WHERE c.role = 'key' ORDER BY c.keyorder) || v_cc;
+    -- the row key: the chunk table's key columns before revision, the chunk column last (in place of chunk),
+    -- from the catalog in one query: the queued path of an UPDATE needs nothing more
+    SELECT array_agg(CASE WHEN a.attname = 'chunk' THEN v_cc ELSE a.attname::text END ORDER BY a.attnum) INTO v_keycols
+      FROM pg_attribute a
+     WHERE a.attrelid = v_chunk::regclass AND a.attnum > 0
+       AND a.attnum < (SELECT r.attnum FROM pg_attribute r WHERE r.attrelid = v_chunk::regclass AND r.attname = 'revision');
+    IF TG_LEVEL = 'ROW' AND TG_OP = 'UPDATE' THEN
+        -- (the key columns are bigint and time values: their jsonb forms are equal when they are)
+        v_dup := (SELECT bool_and(o.j -> k = n.j -> k)
+                    FROM (SELECT to_jsonb(OLD) AS j) o, (SELECT to_jsonb(NEW) AS j) n, unnest(v_keycols) AS k);
+        IF v_dup THEN
+            -- the key stays: queued with the row read, checked and written when the statement ends
+            IF to_regclass(v_queue) IS NULL THEN
+                EXECUTE format('CREATE TEMP TABLE %s (LIKE %s, _delete boolean NOT NULL DEFAULT false, tgsis_old %s) '
+                               'ON COMMIT DELETE ROWS', v_queue, v_face, v_face);
+            ELSIF (SELECT c.relowner FROM pg_class c WHERE c.oid = to_regclass(v_queue)) <> (SELECT r.oid FROM pg_roles r WHERE r.rolname = current_user) THEN
+                RAISE EXCEPTION 'the session''s table % was not made by the face''s trigger', v_queue
+                    USING ERRCODE = 'insufficient_privilege', HINT = 'drop the temporary table and write again';
+            END IF;
+            EXECUTE format('INSERT INTO %s SELECT ($1).*, false, $2', v_queue) USING NEW, OLD;
+            RETURN NEW;
+        END IF;
+    END IF;
     -- the pieces of the statements below, for a row %1$s of the face's type ($3, or the queue's q)
     v_match := array_to_string(ARRAY(SELECT format('c.%I = (%%1$s).%I', k, k) FROM unnest(v_keycols[1:cardinality(v_keycols) - 1]) AS k)
                                || format('c.chunk = (%%1$s).%I >> %s', v_cc, v_shift), ' AND ');
@@ -146,10 +168,8 @@ BEGIN
     END IF;
     v_geoids := v_keys::bigint[];
 
-    -- rights, revision, object locks, notes (per row; the flush again for the set it writes)
-    IF TG_LEVEL = 'ROW' THEN
-        PERFORM tgsis.check_class_write(v_geoids, CASE WHEN TG_OP = 'DELETE' THEN 'UPDATE, DELETE' ELSE 'UPDATE' END);
-    END IF;
+    -- rights, revision, object locks, notes (per row; for the queued rows, by the flush for all at once)
+    PERFORM tgsis.check_class_write(v_geoids, CASE WHEN TG_OP = 'DELETE' THEN 'UPDATE, DELETE' ELSE 'UPDATE' END);
     IF EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = v_table) THEN
         SELECT w.versionid, w.revision, w.revisions INTO v_vid, v_w, v_set FROM tgsis.write_revision() AS w;  -- TG002, TG301
         IF v_reg.objectclass = 'feature' AND EXISTS (SELECT FROM tgsis.unversioned_features u WHERE u.geoid = ANY (v_geoids)) THEN
@@ -162,18 +182,21 @@ BEGIN
         v_w := 0;
         v_set := ARRAY[0];
     END IF;
-    IF TG_LEVEL = 'ROW' THEN
-        IF EXISTS (SELECT FROM tgsis.object_locks l WHERE l.objectclass = v_reg.objectclass AND l.objectkey = ANY (v_keys)) THEN
-            PERFORM tgsis.check_objects_unlocked(v_reg.objectclass, v_keys);
-        END IF;
+    IF EXISTS (SELECT FROM tgsis.object_locks l WHERE l.objectclass = v_reg.objectclass AND l.objectkey = ANY (v_keys)) THEN
+        PERFORM tgsis.check_objects_unlocked(v_reg.objectclass, v_keys);
+    END IF;
+    IF cardinality(v_keys) > tgsis.object_lock_limit() THEN
+        -- more objects than the shared lock table holds locks for: the class's lock in the version, exclusively
+        PERFORM pg_advisory_xact_lock(tgsis.object_class_lock_key(v_reg.objectclass, v_vid));
+    ELSE
         PERFORM pg_advisory_xact_lock_shared(tgsis.object_lock_key(v_reg.objectclass, k, v_vid))
            FROM (SELECT DISTINCT k FROM unnest(v_keys) AS k ORDER BY k) AS s;
-        IF v_w <> 0 AND EXISTS (SELECT FROM unnest(v_keys) AS k
-                                 WHERE NOT EXISTS (SELECT FROM tgsis.revision_objects o
-                                                    WHERE o.revision = v_w AND o.schemaname = 'tgsis' AND o.tablename = v_table
-                                                      AND o.objectkey = k)) THEN
-            PERFORM tgsis.record_changed_objects('tgsis', v_table, v_keys);
-        END IF;
+    END IF;
+    IF v_w <> 0 AND EXISTS (SELECT FROM unnest(v_keys) AS k
+                             WHERE NOT EXISTS (SELECT FROM tgsis.revision_objects o
+                                                WHERE o.revision = v_w AND o.schemaname = 'tgsis' AND o.tablename = v_table
+                                                  AND o.objectkey = k)) THEN
+        PERFORM tgsis.record_changed_objects('tgsis', v_table, v_keys);
     END IF;
 
     IF TG_LEVEL = 'STATEMENT' THEN
@@ -220,17 +243,6 @@ BEGIN
         PERFORM tgsis.write_chunk_rows(v_table, v_queue::regclass);
         EXECUTE format('DELETE FROM %s', v_queue);
         RETURN NULL;
-    END IF;
-
-    IF TG_OP = 'UPDATE' THEN
-        EXECUTE format('SELECT ROW(%1$s) IS NOT DISTINCT FROM ROW(%2$s)',
-                       array_to_string(ARRAY(SELECT format('($1).%I', k) FROM unnest(v_keycols) AS k), ', '),
-                       array_to_string(ARRAY(SELECT format('($2).%I', k) FROM unnest(v_keycols) AS k), ', '))
-           INTO v_dup USING OLD, NEW;
-        IF v_dup THEN  -- the key stays: queued, written when the statement ends
-            EXECUTE format('INSERT INTO %s SELECT ($1).*, false, $2', v_queue) USING NEW, OLD;
-            RETURN NEW;
-        END IF;
     END IF;
 
     -- the chunks' locks (the old key's, the new key's), in key order
