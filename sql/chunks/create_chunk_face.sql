@@ -94,7 +94,7 @@ BEGIN
     v_face := format('tgsis.%I', v_view)::regclass;
     EXECUTE format('COMMENT ON VIEW %s IS %L', v_face,
                    format('%s, stored in chunks (%s, docs/storage.md "The relational face"): the rows of the %s chunk versions, '
-                          'written through INSTEAD OF triggers (tgsis.chunk_face_write); one row by key is read fastest by tgsis.vertex and tgsis.vertices',
+                          'written through INSTEAD OF triggers (tgsis.chunk_face_write); one vertex by key is read fastest by the keyed reads of model 1 (vertex, vertices)',
                           coalesce(obj_description(v_storage, 'pg_class'), 'tgsis.' || p_table), v_chunk,
                           CASE WHEN v_versioned THEN 'session''s visible' ELSE 'stored' END));
     FOR v_c IN SELECT a.attname, col_description(v_storage, s.attnum) AS note
