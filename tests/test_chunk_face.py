@@ -229,6 +229,22 @@ def test_writes_through_the_face_in_a_child_version_leave_the_parent_unchanged(c
     # the parent keeps its content
     tgsis.goto_version(conn, "DEFAULT")
     assert _face(conn) == rows == _decoded(conn, "vrtx")
+    # one statement changing a row twice (a join): 21000, as today's view
+    twice = "UPDATE tgsis.{} f SET z = 0 FROM (VALUES (1), (2)) AS v(a) WHERE f.geoid = %s AND f.vrtxid = 0"
+    for view in ("vrtx_face", "vrtx"):
+        assert _sqlstate(conn, sql.SQL(twice).format(sql.Identifier(view)).as_string(conn), (geoid,)) == "21000", view
+    # a session viewing an older revision of the child cannot write: TG301, as through today's view
+    tgsis.goto_version(conn, "child")
+    older = conn.execute("SELECT tgsis.get_working_revision()").fetchone()
+    assert older is not None
+    conn.execute("SELECT tgsis.save_revision('one')")
+    conn.commit()
+    conn.execute("SELECT tgsis.goto_revision('child', %s)", (older[0],))
+    conn.commit()
+    for view in ("vrtx_face", "vrtx"):
+        statement = sql.SQL("UPDATE tgsis.{} SET z = 0 WHERE geoid = %s AND vrtxid = 0").format(sql.Identifier(view))
+        assert _sqlstate(conn, statement.as_string(conn), (geoid,)) == "TG301", view
+    tgsis.goto_version(conn, "child")
     conn.commit()
 
 
