@@ -243,8 +243,8 @@ def test_writes_through_the_face_in_a_child_version_leave_the_parent_unchanged(c
     conn.execute("SELECT tgsis.goto_revision('child', %s)", (older[0],))
     conn.commit()
     for view in ("vrtx_face", "vrtx"):
-        statement = sql.SQL("UPDATE tgsis.{} SET z = 0 WHERE geoid = %s AND vrtxid = 0").format(sql.Identifier(view))
-        assert _sqlstate(conn, statement.as_string(conn), (geoid,)) == "TG301", view
+        viewed = sql.SQL("UPDATE tgsis.{} SET z = 0 WHERE geoid = %s AND vrtxid = 0").format(sql.Identifier(view))
+        assert _sqlstate(conn, viewed.as_string(conn), (geoid,)) == "TG301", view
     tgsis.goto_version(conn, "child")
     conn.commit()
 
