@@ -26,7 +26,8 @@
 --     current chunk. Two face writers of different slots of one chunk wait
 --     for each other (the lock is the chunk's), and two chunks locked in
 --     opposite orders can deadlock (40P01) where rows would not;
---   * INSERT of a visible key is 23505 naming today's key (<table>_pkey); an
+--   * INSERT of a visible key is 23505 naming today's key (<table>_pkey), TG306
+--     when the client's query says ON CONFLICT (as today's views); an
 --     UPDATE changing the key is a delete of the old key and an insert of the
 --     new (23505 when it is there); RETURNING returns the row written;
 --   * an UPDATE keeping the key is queued (pg_temp.tgsis_face_queue_<view oid>,
@@ -285,6 +286,17 @@ BEGIN
         EXECUTE v_locate INTO v_state USING v_set, NEW, NEW;
         IF v_state IS NOT NULL AND v_state <> 'absent' THEN
             EXECUTE 'SELECT ' || format(v_keytext, '$1') INTO v_changed USING NEW;
+            -- the trigger cannot tell whether the statement said ON CONFLICT (PostgreSQL does not pass the
+            -- clause to it): named when the client's query has it, as today's views do, never skipped
+            IF TG_OP = 'INSERT' AND pg_catalog.current_query() ~* '\mon\s+conflict\M' THEN
+                RAISE EXCEPTION 'INSERT ... ON CONFLICT is not supported on the versioned view %', v_face
+                    USING ERRCODE = 'TG306',
+                          DETAIL = format('Key (%s)=(%s) is there in version %s; the view cannot skip or update it as ON CONFLICT would, '
+                                          'so the statement is refused and nothing is written.', array_to_string(v_keycols, ', '),
+                                          v_changed, quote_literal(tgsis.get_working_version())),
+                          HINT = 'insert only the keys that are not there yet, and change the others with an update',
+                          TABLE = v_table, SCHEMA = 'tgsis';
+            END IF;
             RAISE EXCEPTION 'duplicate key value violates unique constraint "%"', v_table || '_pkey'
                 USING ERRCODE = 'unique_violation',
                       DETAIL = format('Key (%s)=(%s) already exists in version %s.', array_to_string(v_keycols, ', '), v_changed,
