@@ -40,13 +40,6 @@ DECLARE
 BEGIN
     SELECT * INTO v_reg FROM tgsis.model_tables t WHERE t.tablename = p_table;
     PERFORM FROM tgsis.chunk_columns(p_table);  -- TG200 when not registered for chunks, TG100 when it does not fit
-    IF v_reg.chunksize > 16384 THEN
-        -- (the registry allows up to 65536, but holes are smallint slots: 1..32767)
-        RAISE EXCEPTION 'tgsis.% has chunksize %, more than the 16384 the holes column can number', quote_ident(p_table),
-                v_reg.chunksize
-            USING ERRCODE = 'TG100', DETAIL = 'holes lists slots as smallint (at most 32767).',
-                  HINT = 'register a chunksize of at most 16384';
-    END IF;
     IF octet_length(v_name || '_rows') > 63 THEN
         RAISE EXCEPTION 'table name % is too long for a chunk table', quote_literal(p_table)
             USING ERRCODE = 'TG101', DETAIL = 'The chunk table <table>_chunk and its face <table>_chunk_rows must fit in 63 bytes.';

@@ -60,7 +60,7 @@ CREATE TABLE tgsis.model_tables (
     -- and a block size, a power of two; one stored as rows has neither, nor ref columns
     CONSTRAINT model_tables_chunks CHECK ((chunkcolumn IS NULL) = (chunksize IS NULL)
                                           AND (chunkcolumn IS NOT NULL OR chunkrefs = '{}')
-                                          AND (chunksize IS NULL OR (chunksize >= 64 AND chunksize <= 65536
+                                          AND (chunksize IS NULL OR (chunksize >= 64 AND chunksize <= 16384
                                                                      AND chunksize & (chunksize - 1) = 0)))
 );
 
@@ -82,7 +82,7 @@ COMMENT ON COLUMN tgsis.model_tables.chunkcolumn IS
 COMMENT ON COLUMN tgsis.model_tables.chunkrefs IS
     'the columns holding vertex ids, stored relative to the chunk''s smallest one (vbase) in its chunk table; empty for a table stored as rows';
 COMMENT ON COLUMN tgsis.model_tables.chunksize IS
-    'ids per chunk (a power of two, 64..65536; 1024 today); NULL when chunkcolumn is NULL';
+    'ids per chunk (a power of two, 64..16384: holes number slots as smallint; 1024 today); NULL when chunkcolumn is NULL';
 
 -- the geometry core: one tgsis.geometry row per stored object of every model
 INSERT INTO tgsis.data_models (model, name, timemodel, create_function, description)

@@ -108,7 +108,7 @@ ALTER TABLE tgsis.model_tables
     ADD COLUMN chunksize   integer,
     ADD CONSTRAINT model_tables_chunks CHECK ((chunkcolumn IS NULL) = (chunksize IS NULL)
                                               AND (chunkcolumn IS NOT NULL OR chunkrefs = '{}')
-                                              AND (chunksize IS NULL OR (chunksize >= 64 AND chunksize <= 65536
+                                              AND (chunksize IS NULL OR (chunksize >= 64 AND chunksize <= 16384
                                                                          AND chunksize & (chunksize - 1) = 0)));
 UPDATE tgsis.model_tables t SET chunkcolumn = c.chunkcolumn, chunkrefs = c.chunkrefs, chunksize = 1024
   FROM (VALUES ('vrtx', 'vrtxid', '{}'::text[]), ('point', 'pointid', '{vrtxid1}'), ('segment', 'segid', '{vrtxid1,vrtxid2}'),

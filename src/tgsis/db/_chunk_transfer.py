@@ -1,0 +1,423 @@
+"""Bulk transfer of model-1 objects on chunk tables (issue 40, part 5): upload and download of whole objects.
+
+The two bulk paths the storage switch will call (docs/storage.md, "What each
+bulk path does on chunks"); nothing of today's storage calls them yet. A
+chunk table ``tgsis.<t>_chunk`` (made by ``tgsis.create_chunk_table``)
+holds an object's rows of ``tgsis.<t>`` in blocks of 1,024 ids
+(:mod:`tgsis._chunks` encodes and parses them):
+
+* :func:`upload_chunks` writes new objects: their chunk rows, encoded by
+  numpy, in ONE binary COPY per table, in the session's working revision
+  (what a COPY into ``<t>_ver`` gets today: :class:`~tgsis.db._transfer.Storage`;
+  0 for unversioned storage and for features of classes without versioning),
+  and notes the objects changed in that revision as the storage's insert
+  trigger notes a COPY's (``tgsis.record_changed_objects``). An object that
+  has a chunk already is refused: this is no edit path.
+* :func:`download_chunks` reads the chunk versions the session's version sees
+  (today's versioned views' test, ``tgsis.get_revisions(true)``; every chunk
+  of unversioned storage) of one or many objects with one
+  ``COPY (SELECT ...) TO STDOUT (FORMAT binary)`` per table, inside one
+  snapshot for several tables (:func:`~tgsis.db._transfer.one_snapshot`),
+  and parses them into ids and arrays per object.
+
+Rights are the role's own: the COPY runs as it, so the chunk table's grants
+and row-level security (the row storage's, copied by
+``tgsis.create_chunk_table``) decide; under row-level security the rows go
+through a temporary table first (:func:`~tgsis.db._transfer.staged`).
+Private to ``tgsis.db``.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+import psycopg
+from psycopg import sql
+
+from tgsis._chunks import CHUNK_SIZE, COPY_SIGNATURE, ChunkColumns, ChunkSet, encode, from_copy, to_copy
+from tgsis.db._transfer import Storage, one_snapshot, read_only_snapshot, staged
+from tgsis.errors import AlreadyExistsError, InvalidInputError, NotFoundError
+
+__all__ = [
+    "ChunkTable",
+    "ObjectRows",
+    "chunk_table",
+    "upload_chunks",
+    "download_chunks",
+    "download_tables",
+    "chunk_copy_query",
+    "split_copy",
+]
+
+Conn = psycopg.Connection[Any]
+
+#: the columns of every chunk table that are neither key nor array of the row table
+_FIXED = ("revision", "lastrevs", "revclosed", "holes", "vbase")
+
+
+@dataclass(frozen=True)
+class ChunkTable:
+    """A chunk table as the client sees it in the catalog.
+
+    Attributes
+    ----------
+    table : str
+        The row table (``vrtx``, ``trgl``, ...); the chunk table is ``tgsis.<table>_chunk``.
+    columns : ChunkColumns
+        Its arrays: ``double precision[]`` columns as float8, ``integer[]`` ones as ref columns.
+    versioned : bool
+        The row table is versioned (``tgsis.versioned_tables``): chunk versions are filtered by the session's set.
+    """
+
+    table: str
+    columns: ChunkColumns
+    versioned: bool
+
+    @property
+    def relation(self) -> sql.Composed:
+        """``tgsis.<table>_chunk``, quoted."""
+        return sql.SQL("tgsis.{}").format(sql.Identifier(f"{self.table}_chunk"))
+
+
+@dataclass(frozen=True)
+class ObjectRows:
+    """One object's rows of a chunked table: what an upload writes and a download returns.
+
+    Attributes
+    ----------
+    geoid : int
+    ids : (n,) int64
+        Local ids (vrtxid, trglid, ...), >= 0, distinct; ascending in a download.
+    columns : dict of str to (n,) ndarray
+        Every non-key column of the row table: float64 for float8 columns, int64 vertex ids for ref columns.
+    holes : (h,) int64
+        Download only: the ids absent inside the stored chunks (below each chunk's last present id), ascending.
+    """
+
+    geoid: int
+    ids: npt.NDArray[np.int64]
+    columns: dict[str, npt.NDArray[Any]]
+    holes: npt.NDArray[np.int64] = field(default_factory=lambda: np.empty(0, dtype=np.int64))
+
+    def array(self) -> npt.NDArray[Any]:
+        """(n, k) the columns side by side in column order: vertices (n, 3) float64, cells (n, k) int64."""
+        values = list(self.columns.values())
+        if len({v.dtype for v in values}) > 1:
+            raise InvalidInputError(f"columns {list(self.columns)} differ in type: take them one by one")
+        return np.stack(values, axis=1) if values else np.empty((len(self.ids), 0))
+
+
+def chunk_table(conn: Conn, table: str) -> ChunkTable:
+    """The chunk table of ``tgsis.<table>``, read from the catalog (any role may read it).
+
+    Raises
+    ------
+    NotFoundError
+        ``tgsis.<table>_chunk`` does not exist (TG200).
+    InvalidInputError
+        Its layout is not the one this client encodes (key ``geoid, chunk``, 1,024 ids per chunk).
+    """
+    row = conn.execute(
+        "SELECT to_regclass(format('tgsis.%%I', %s::text || '_chunk'))::oid, "
+        "EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = %s), "
+        "(SELECT m.chunksize FROM tgsis.model_tables m WHERE m.tablename = %s)",
+        (table, table, table),
+    ).fetchone()
+    if row is None or row[0] is None:
+        raise NotFoundError(
+            f"tgsis.{table} has no chunk table",
+            detail=f"tgsis.{table}_chunk does not exist (tgsis.create_chunk_table makes it)",
+        )
+    oid, versioned, size = row
+    attributes = conn.execute(
+        "SELECT attname::text, format_type(atttypid, atttypmod) FROM pg_catalog.pg_attribute "
+        "WHERE attrelid = %s AND attnum > 0 AND NOT attisdropped ORDER BY attnum",
+        (oid,),
+    ).fetchall()
+    names = [name for name, _ in attributes]
+    keys = names[: names.index("revision")] if "revision" in names else names
+    arrays = [(n, t) for n, t in attributes if n not in keys and n not in _FIXED and not n.endswith("_wide")]
+    refs = tuple(n for n, t in arrays if t == "integer[]")
+    if (
+        keys != ["geoid", "chunk"]
+        or size != CHUNK_SIZE
+        or any(t not in ("integer[]", "double precision[]") for _, t in arrays)
+    ):
+        raise InvalidInputError(
+            f"tgsis.{table}_chunk is not a model-1 chunk table of {CHUNK_SIZE} ids per chunk",
+            detail=f"key {keys}, chunk size {size}, arrays {arrays}",
+        )
+    return ChunkTable(table, ChunkColumns(tuple(n for n, _ in arrays), refs=refs), bool(versioned))
+
+
+def upload_chunks(conn: Conn, table: str, objects: Sequence[ObjectRows], storage: Storage | None = None) -> int:
+    """Write new objects' rows of ``tgsis.<table>`` as chunk rows: one binary COPY for all of them.
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+        Its role writes (the chunk table's grants and row-level security apply).
+    table : str
+        A row table with a chunk table (``vrtx``, ``point``, ``segment``, ``trgl``, ``tetra``).
+    objects : sequence of ObjectRows
+        One per object (distinct geoids); ``columns`` (n,) each, by name.
+    storage : Storage, optional
+        Where the session writes (:meth:`Storage.of`; of a class without versioning: revision 0).
+        Default: ``Storage.of(conn)``.
+
+    Returns
+    -------
+    int
+        The chunk rows written.
+
+    Raises
+    ------
+    AlreadyExistsError
+        An object has chunks already in ``tgsis.<table>_chunk`` (of any version, among those the role may
+        read: a class it may not read cannot be written either), or a concurrent upload of it in the same
+        revision committed first: nothing is written.
+    NotVersionedError, ReadOnlyRevisionError
+        The session may not write here (as for today's COPY into storage).
+    InvalidInputError
+        Repeated geoids, ids or columns the codec refuses.
+    psycopg.errors.InsufficientPrivilege
+        The role lacks INSERT on the chunk table, or the class's right (row-level security).
+    """
+    layout = chunk_table(conn, table)
+    geoids = [int(o.geoid) for o in objects]
+    if len(set(geoids)) != len(geoids):
+        raise InvalidInputError(f"geoids repeat in one upload of tgsis.{table}: {geoids}")
+    storage = storage if storage is not None else Storage.of(conn)
+    storage.check("tgsis", table)
+    revision = int(storage.revision or 0) if ("tgsis", table) in storage.versioned else 0
+    # encode first: bad input is refused before anything is sent
+    encoded = [encode(o.ids, o.columns, layout.columns) for o in objects]
+    if not objects:
+        return 0
+    existing = conn.execute(
+        sql.SQL("SELECT array_agg(DISTINCT geoid ORDER BY geoid) FROM {} WHERE geoid = ANY (%s)").format(
+            layout.relation
+        ),
+        (geoids,),
+    ).fetchone()
+    if existing is not None and existing[0]:
+        raise AlreadyExistsError(
+            f"objects {existing[0]} have chunks in tgsis.{table}_chunk already: an upload writes new objects only",
+            detail="nothing was written",
+        )
+    names = layout.columns.copy_columns()
+    statement = sql.SQL("COPY {} ({}) FROM STDIN (FORMAT binary)")
+    try:
+        with staged(conn, layout.relation, names) as into:
+            with conn.cursor().copy(statement.format(into, sql.SQL(", ").join(map(sql.Identifier, names)))) as copy:
+                for k, (chunks, geoid) in enumerate(zip(encoded, geoids)):
+                    stream = to_copy(chunks, geoid, revision)
+                    # one stream: the header once, the trailer once
+                    copy.write(memoryview(stream)[19 if k else 0 : -2 if k < len(encoded) - 1 else None])
+    except psycopg.errors.UniqueViolation as exc:
+        # a concurrent upload of the same object in the same revision committed first (this one waited for it)
+        raise AlreadyExistsError(
+            f"objects {geoids} of tgsis.{table}_chunk were written meanwhile by another transaction",
+            detail=f"{(exc.diag.message_detail or '')[:300]}; nothing was written",
+        ) from exc
+    if layout.versioned and revision != 0:
+        conn.execute("SELECT tgsis.record_changed_objects('tgsis', %s, %s::text[])", (table, [str(g) for g in geoids]))
+    return sum(len(c.chunk) for c in encoded)
+
+
+def _visible(layout: ChunkTable, revisions: Sequence[int] | None = None) -> sql.Composable:
+    """The session's visibility test of chunk versions (today's versioned views'), or none when unversioned.
+
+    ``revisions``: the set to test with (the session's ``tgsis.get_revisions(true)`` read beforehand), for a
+    statement run on another connection, whose session may be in another version.
+    """
+    if not layout.versioned:
+        return sql.SQL("true")
+    if revisions is not None:
+        return sql.SQL("(c.revision = ANY ({set})) IS TRUE AND (NOT c.revclosed OR NOT (c.lastrevs && {set}))").format(
+            set=sql.SQL("{}::integer[]").format(sql.Literal([int(r) for r in revisions]))
+        )
+    return sql.SQL(
+        "(c.revision = ANY ((SELECT tgsis.get_revisions(true))::integer[])) IS TRUE "
+        "AND (NOT c.revclosed OR NOT (c.lastrevs && (SELECT tgsis.get_revisions(true))))"
+    )
+
+
+def chunk_copy_query(layout: ChunkTable, geoids: Sequence[int], revisions: Sequence[int] | None = None) -> sql.Composed:
+    """The COPY of the visible chunk versions of ``geoids``: their columns for :func:`~tgsis._chunks.from_copy`.
+
+    For one object the stream is :func:`from_copy`'s as it is; for several, each row starts with
+    ``geoid`` (rows in no order), which :func:`split_copy` takes off. ``revisions``: the set of
+    :func:`_visible` (default: the session's).
+    """
+    columns = sql.SQL(", ").join(sql.SQL("c.{}").format(sql.Identifier(c)) for c in layout.columns.select_columns())
+    if len(geoids) == 1:
+        select = sql.SQL("SELECT {} FROM {} c WHERE c.geoid = {} AND {}").format(
+            columns, layout.relation, sql.Literal(int(geoids[0])), _visible(layout, revisions)
+        )
+    else:
+        select = sql.SQL("SELECT c.geoid, {} FROM {} c WHERE c.geoid = ANY ({}::bigint[]) AND {}").format(
+            columns, layout.relation, sql.Literal([int(g) for g in geoids]), _visible(layout, revisions)
+        )
+    return sql.SQL("COPY ({}) TO STDOUT (FORMAT binary)").format(select)
+
+
+def split_copy(payload: bytes) -> dict[int, bytes]:
+    """A binary COPY stream whose rows start with a ``bigint`` geoid as one stream per geoid, without that field.
+
+    Walks the rows' field lengths (a few thousand rows per million ids); the values are not parsed here.
+
+    Raises
+    ------
+    InvalidInputError
+        Not a binary COPY stream, or a row whose first field is not a bigint.
+    """
+    view = memoryview(payload)
+    if bytes(view[:11]) != COPY_SIGNATURE:
+        raise InvalidInputError("not a PostgreSQL binary COPY stream (no PGCOPY signature)")
+    pos = 19 + int.from_bytes(view[15:19], "big")
+    header = bytes(view[:pos])
+    pieces: dict[int, list[Any]] = {}
+    try:
+        while True:
+            count = int.from_bytes(view[pos : pos + 2], "big", signed=True)
+            if count == -1:
+                break
+            if count < 1 or int.from_bytes(view[pos + 2 : pos + 6], "big", signed=True) != 8:
+                raise InvalidInputError("a chunk row does not start with a bigint geoid")
+            geoid = int.from_bytes(view[pos + 6 : pos + 14], "big", signed=True)
+            start = pos + 14
+            pos = start
+            for _ in range(count - 1):
+                length = int.from_bytes(view[pos : pos + 4], "big", signed=True)
+                pos += 4 + max(length, 0)
+            if pos > len(view):
+                raise IndexError
+            out = pieces.setdefault(geoid, [header])
+            out.append((count - 1).to_bytes(2, "big", signed=True))
+            out.append(view[start:pos])
+    except IndexError:
+        raise InvalidInputError("binary COPY data ends inside a row") from None
+    trailer = b"\xff\xff"
+    return {geoid: b"".join([*parts, trailer]) for geoid, parts in pieces.items()}
+
+
+def _copy_out(conn: Conn, query: sql.Composed) -> bytes:
+    with conn.cursor().copy(query) as copy:
+        return b"".join(bytes(block) for block in copy)
+
+
+def _objects(layout: ChunkTable, geoids: Sequence[int], payload: bytes) -> dict[int, ObjectRows]:
+    """Each wanted object's rows from the COPY of :func:`chunk_copy_query` (no chunk: no rows)."""
+    streams = {int(geoids[0]): payload} if len(geoids) == 1 else split_copy(payload)
+    result: dict[int, ObjectRows] = {}
+    for geoid in geoids:
+        stream = streams.get(int(geoid))
+        chunks = from_copy(stream, layout.columns) if stream is not None else None
+        result[int(geoid)] = _rows(int(geoid), chunks, layout.columns)
+    return result
+
+
+def _rows(geoid: int, chunks: ChunkSet | None, spec: ChunkColumns) -> ObjectRows:
+    if chunks is None or not len(chunks.chunk):
+        empty = {n: np.empty(0, dtype=np.int64 if n in spec.refs else np.float64) for n in spec.names}
+        return ObjectRows(geoid, np.empty(0, dtype=np.int64), empty)
+    ids, columns = chunks.rows()
+    holes = np.empty(0, dtype=np.int64) if chunks.present.all() else chunks.ids()[~chunks.present]
+    return ObjectRows(geoid, ids, columns, holes)
+
+
+def download_chunks(conn: Conn, table: str, geoids: Sequence[int]) -> dict[int, ObjectRows]:
+    """The rows of ``tgsis.<table>`` of objects ``geoids`` as the session's version sees them, from their chunks.
+
+    One ``COPY ... TO STDOUT (FORMAT binary)`` of the visible chunk versions (today's visibility test of the
+    versioned views; every chunk of unversioned storage), read with the role's rights (the chunk table's
+    grants and row-level security: a class the role may not read has no rows).
+
+    Parameters
+    ----------
+    table : str
+        A row table with a chunk table.
+    geoids : sequence of int
+
+    Returns
+    -------
+    dict of int to ObjectRows
+        Per geoid (every one asked; an object without visible chunks has no rows): ids ascending,
+        the columns in id order, the holes.
+    """
+    return download_tables(conn, {table: geoids})[table]
+
+
+def download_tables(
+    conn: Conn, requests: Mapping[str, Sequence[int]], side: Conn | None = None
+) -> dict[str, dict[int, ObjectRows]]:
+    """:func:`download_chunks` of several tables, one COPY each, all in one snapshot (:func:`one_snapshot`).
+
+    Outside a transaction the COPYs run in one ``REPEATABLE READ READ ONLY`` transaction: a writer that
+    commits between them is seen by none or all of them. Inside the caller's, they see what its isolation
+    level gives.
+
+    Parameters
+    ----------
+    conn : psycopg.Connection
+    requests : mapping of str to sequence of int
+        The geoids to read of each table.
+    side : psycopg.Connection, optional
+        A second connection of the same role, outside a transaction: the last table's COPY runs on it,
+        side by side with the others (bench/chunk_transfer.py measures what that gains), in the snapshot
+        ``conn`` exports to it (``pg_export_snapshot``) and with ``conn``'s session's set of revisions.
+        Used only when ``conn`` is outside a transaction too (a snapshot is not exported from a savepoint)
+        and more than one table is asked; else everything runs on ``conn``.
+
+    Raises
+    ------
+    InvalidInputError
+        ``side`` logs in as another role than ``conn``, or is inside a transaction.
+    """
+    wanted = {table: list(dict.fromkeys(int(g) for g in geoids)) for table, geoids in requests.items()}
+    idle = psycopg.pq.TransactionStatus.IDLE
+    parallel = side is not None and len(wanted) > 1 and conn.info.transaction_status == idle
+    result: dict[str, dict[int, ObjectRows]] = {}
+    with one_snapshot(conn), concurrent.futures.ThreadPoolExecutor(1) as pool:
+        layouts = {table: chunk_table(conn, table) for table in wanted}
+        pending = None
+        if parallel and side is not None:
+            row = conn.execute("SELECT pg_export_snapshot(), current_user::text, tgsis.get_revisions(true)").fetchone()
+            assert row is not None
+            snapshot, role, revisions = row
+            last = list(wanted)[-1]
+            pending = pool.submit(_side_copy, side, snapshot, role, layouts[last], wanted[last], revisions)
+            wanted = {table: geoids for table, geoids in wanted.items() if table != last}
+        for table, geoids in wanted.items():
+            layout = layouts[table]
+            result[table] = (
+                _objects(layout, geoids, _copy_out(conn, chunk_copy_query(layout, geoids))) if geoids else {}
+            )
+        if pending is not None:
+            table, payload, geoids = pending.result()
+            result[table] = _objects(layouts[table], geoids, payload) if geoids else {}
+    return {table: result[table] for table in requests}
+
+
+def _side_copy(
+    side: Conn, snapshot: str, role: str, layout: ChunkTable, geoids: list[int], revisions: Sequence[int]
+) -> tuple[str, bytes, list[int]]:
+    """One table's COPY on the second connection of :func:`download_tables`, in the snapshot it was given."""
+    if side.info.transaction_status != psycopg.pq.TransactionStatus.IDLE:
+        raise InvalidInputError("the second connection of a download is inside a transaction")
+    with read_only_snapshot(side):
+        side.execute(sql.SQL("SET TRANSACTION SNAPSHOT {}").format(sql.Literal(snapshot)))
+        row = side.execute("SELECT current_user::text").fetchone()
+        if row is None or row[0] != role:
+            raise InvalidInputError(
+                f"the second connection of a download logs in as {row[0] if row else None!r}, not as {role!r}",
+                detail="it would read with another role's rights",
+            )
+        payload = _copy_out(side, chunk_copy_query(layout, geoids, revisions)) if geoids else b""
+    return layout.table, payload, geoids
