@@ -170,6 +170,8 @@ _NAMED_IN_DOCS = frozenset(
         "version_believed_at",
         "version_chain",
         "version_id",
+        "vertex",
+        "vertices",
         "vertices_at",
         "write_revision",
     }

@@ -1,0 +1,131 @@
+-- tgsis.create_chunk_face(table, view): the relational face of a chunk table, a view with the row table's columns and name.
+-- docs/storage.md, "The relational face: views with today's names": once a
+-- model table is stored in chunks, tgsis.<table> is this view over the
+-- visible chunk versions of tgsis.<table>_chunk, with exactly the row table's
+-- columns (names, types, order, comments), decoded as tgsis.create_chunk_view
+-- decodes them. Versioned storage (tgsis.versioned_tables): the visibility
+-- test of today's versioned views (tgsis.versioned_view_source: the session's
+-- viewing set, get_revisions in scalar subqueries so that it runs once per
+-- query); unversioned storage: every chunk (revision 0). The view reads the
+-- chunk table as its owner (the storage's), whom row-level security spares,
+-- so it applies the class rights filter of the model tables itself, as a
+-- security barrier (tgsis.create_versioned_view does the same). Grants: those
+-- of today's relation tgsis.<table> when it exists (the view or table the
+-- face will replace), else the storage's. Writes: INSTEAD OF triggers running
+-- tgsis.chunk_face_write (each row; and after each UPDATE statement, the
+-- flush of the queued rows), and for versioned storage the write right's
+-- statement check (tgsis.view_write_check) as today's views have it.
+-- p_view names the view (default: the table's own name, what the storage
+-- switch will use; the tests build the face beside today's live table).
+-- Not idempotent: TG201 when the view exists. Runs with the caller's rights
+-- (tgsis's owner, who owns the storage).
+CREATE FUNCTION tgsis.create_chunk_face(p_table text, p_view text DEFAULT NULL)
+RETURNS regclass
+LANGUAGE plpgsql
+VOLATILE
+SET search_path = pg_catalog, pg_temp
+AS $$
+DECLARE
+    v_reg       tgsis.model_tables;
+    v_view      text := coalesce(p_view, p_table);
+    v_chunk     regclass;
+    v_storage   regclass;
+    v_today     regclass;
+    v_versioned boolean;
+    v_shift     integer;
+    v_refs      text[];
+    v_first     text;
+    v_select    text[] := '{}';
+    v_arrays    text[] := '{}';
+    v_alias     text[] := '{}';
+    v_where     text[] := '{}';
+    v_c         record;
+    v_acl       record;
+    v_face      regclass;
+BEGIN
+    SELECT * INTO v_reg FROM tgsis.model_tables t WHERE t.tablename = p_table;
+    PERFORM FROM tgsis.chunk_columns(p_table);  -- TG200 / TG100
+    v_chunk := to_regclass(format('tgsis.%I', p_table || '_chunk'));
+    IF v_chunk IS NULL THEN
+        RAISE EXCEPTION 'tgsis.% has no chunk table', quote_ident(p_table)
+            USING ERRCODE = 'TG200', HINT = 'create the chunk table first';
+    END IF;
+    IF to_regclass(format('tgsis.%I', v_view)) IS NOT NULL THEN
+        RAISE EXCEPTION 'tgsis.% exists already', quote_ident(v_view)
+            USING ERRCODE = 'TG201', DETAIL = 'The face of a chunk table takes a name no relation has.';
+    END IF;
+    v_storage := tgsis.storage_table('tgsis', p_table)::regclass;
+    v_today := to_regclass(format('tgsis.%I', p_table));
+    v_versioned := EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table);
+    v_shift := round(log(2, v_reg.chunksize))::integer;
+    v_refs := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder);
+    FOR v_c IN SELECT c.name, c.role FROM tgsis.chunk_columns(p_table) c ORDER BY c.colorder LOOP
+        IF v_c.role = 'key' THEN
+            v_select := v_select || format('v.%I', v_c.name);
+        ELSIF v_c.role = 'chunk' THEN
+            v_select := v_select || format('(v.chunk << %s) + u.o - 1 AS %I', v_shift, v_c.name);
+        ELSIF v_c.role = 'float' THEN
+            v_arrays := v_arrays || format('v.%I', v_c.name);
+            v_alias := v_alias || quote_ident(v_c.name);
+            v_select := v_select || format('u.%I', v_c.name);
+            v_first := coalesce(v_first, format('u.%I IS NOT NULL', v_c.name));
+        ELSE
+            v_arrays := v_arrays || format('v.%I', v_c.name) || format('v.%I', v_c.name || '_wide');
+            v_alias := v_alias || quote_ident(v_c.name) || quote_ident(v_c.name || '_wide');
+            v_select := v_select || format('CASE WHEN v.vbase IS NOT NULL THEN v.vbase + %s ELSE u.%I END AS %I',
+                                           CASE WHEN v_c.name = v_refs[1] THEN format('u.%I', v_c.name)
+                                                ELSE format('u.%I + u.%I', v_refs[1], v_c.name) END,
+                                           v_c.name || '_wide', v_c.name);
+            v_first := coalesce(v_first, format('(u.%I IS NOT NULL OR u.%I IS NOT NULL)', v_c.name, v_c.name || '_wide'));
+        END IF;
+    END LOOP;
+    IF v_versioned THEN  -- today's test (tgsis.versioned_view_source)
+        v_where := v_where || '(v.revision = ANY ((SELECT tgsis.get_revisions(true))::integer[])) IS TRUE'::text
+                           || '(NOT v.revclosed OR NOT (v.lastrevs && (SELECT tgsis.get_revisions(true))))'::text;
+    END IF;
+    v_where := v_where || v_first;
+    IF v_reg.geoidcolumn IS NOT NULL THEN
+        v_where := v_where || tgsis.class_rights_filter(v_reg.geoidcolumn, 'SELECT', 'v');
+    END IF;
+    EXECUTE format('CREATE VIEW tgsis.%I WITH (security_barrier = true) AS SELECT %s FROM %s v '
+                   'CROSS JOIN LATERAL unnest(%s) WITH ORDINALITY AS u(%s, o) WHERE %s',
+                   v_view, array_to_string(v_select, ', '), v_chunk, array_to_string(v_arrays, ', '),
+                   array_to_string(v_alias, ', '), array_to_string(v_where, ' AND '));
+    v_face := format('tgsis.%I', v_view)::regclass;
+    EXECUTE format('COMMENT ON VIEW %s IS %L', v_face,
+                   format('%s, stored in chunks (%s, docs/storage.md "The relational face"): the rows of the %s chunk versions, '
+                          'written through INSTEAD OF triggers (tgsis.chunk_face_write); one vertex by key is read fastest by the keyed reads of model 1 (vertex, vertices)',
+                          coalesce(obj_description(v_storage, 'pg_class'), 'tgsis.' || p_table), v_chunk,
+                          CASE WHEN v_versioned THEN 'session''s visible' ELSE 'stored' END));
+    FOR v_c IN SELECT a.attname, col_description(v_storage, s.attnum) AS note
+                 FROM pg_attribute a JOIN pg_attribute s ON s.attrelid = v_storage AND s.attname = a.attname
+                WHERE a.attrelid = v_face AND a.attnum > 0 LOOP
+        IF v_c.note IS NOT NULL THEN
+            EXECUTE format('COMMENT ON COLUMN %s.%I IS %L', v_face, v_c.attname, v_c.note);
+        END IF;
+    END LOOP;
+    -- the grants of today's relation (what the face replaces), else the storage's
+    FOR v_acl IN SELECT a.privilege_type, a.grantee FROM pg_class c, aclexplode(c.relacl) AS a
+                  WHERE c.oid = coalesce(v_today, v_storage) AND a.grantee <> c.relowner
+                    AND a.privilege_type IN ('SELECT', 'INSERT', 'UPDATE', 'DELETE') LOOP
+        EXECUTE format('GRANT %s ON %s TO %s', v_acl.privilege_type, v_face,
+                       CASE WHEN v_acl.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_acl.grantee)) END);
+    END LOOP;
+    EXECUTE format('CREATE TRIGGER tgsis_chunk_face INSTEAD OF INSERT OR UPDATE OR DELETE ON %s '
+                   'FOR EACH ROW EXECUTE FUNCTION tgsis.chunk_face_write(%L)', v_face, p_table);
+    EXECUTE format('CREATE TRIGGER tgsis_chunk_face_flush AFTER UPDATE ON %s '
+                   'FOR EACH STATEMENT EXECUTE FUNCTION tgsis.chunk_face_write(%L)', v_face, p_table);
+    IF v_versioned THEN
+        EXECUTE format('CREATE TRIGGER tgsis_versioning_rights BEFORE INSERT OR UPDATE OR DELETE ON %s '
+                       'FOR EACH STATEMENT EXECUTE FUNCTION tgsis.view_write_check()', v_face);
+    END IF;
+    EXECUTE format('ALTER VIEW %s OWNER TO %I', v_face,
+                   (SELECT pg_get_userbyid(c.relowner) FROM pg_class c WHERE c.oid = v_chunk));
+    RETURN v_face;
+END
+$$;
+
+REVOKE ALL ON FUNCTION tgsis.create_chunk_face(text, text) FROM PUBLIC;
+
+COMMENT ON FUNCTION tgsis.create_chunk_face(text, text) IS
+    'create the view tgsis.<p_view or p_table> over the visible chunk versions of tgsis.<table>_chunk with exactly the row table''s columns (today''s visibility when versioned, the class rights filter, security_barrier, the grants of today''s relation), written through INSTEAD OF triggers (tgsis.chunk_face_write); TG200 without a chunk table, TG201 when the view exists';
