@@ -6,6 +6,9 @@ Set-ups built once: a test that asks for one of the fixtures of
 (``CREATE DATABASE ... TEMPLATE``) of a database where that set-up was
 built once per session, instead of building it again: the test still has a
 database of its own, which it may change and commit as it likes.
+A test module lists set-ups of its own the same way, in a module-level
+``BUILT_ONCE`` (fixture name -> set-up). The test's own code then no longer
+makes those calls: the clone is the database they made, in the same order.
 
 ``--server-tests-only`` deselects the pure tests: those that never reach a
 PostgreSQL server, so give the same result on every version. A test reaches
@@ -25,7 +28,7 @@ from __future__ import annotations
 
 import contextlib
 from collections.abc import Callable, Iterator
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import psycopg
 import pytest
@@ -136,26 +139,53 @@ def _series(conn: Conn) -> int:
     return make_series(conn)
 
 
+def _evolving(conn: Conn) -> int:
+    from tests.test_merge_instants import make_evolving
+
+    return make_evolving(conn)
+
+
+def _periods(conn: Conn) -> int:
+    from tests.test_sql_merge_periods import make_periods
+
+    return make_periods(conn)
+
+
+class BuiltOnce(Protocol):
+    """The ``built_once`` fixture: ``get(name, build=None) -> (database, value)``."""
+
+    def __call__(self, name: str, build: Callable[[Conn], int] | None = None, /) -> tuple[str, int]: ...
+
+
 # fixture name -> the set-up it gives, built on a connection (committed) and returning a value (a geoid)
 _BUILT_ONCE: dict[str, Callable[[Conn], int]] = {
     "fault_clone": _fault,  # tests.merge_data.make_fault: the curved fault in DEFAULT, version e1
     "three_regions_clone": _three_regions,  # tests.test_conflict_regions.three_regions
     "two_conflicts_clone": _two_conflicts,  # tests.test_resolve_all_regions.two_conflicts
     "series_clone": _series,  # tests.test_merge_instants.make_series: a model-2 surface in DEFAULT, version e1
+    "evolving_clone": _evolving,  # tests.test_merge_instants.make_evolving: a model-3 surface in DEFAULT, version e1
+    "periods_clone": _periods,  # tests.test_sql_merge_periods.make_periods: a model-3 surface in DEFAULT, version e1
 }
 
 
 @pytest.fixture(scope="session")
-def built_once(pg: TestServer, template_db: str) -> Iterator[Callable[[str], tuple[str, int]]]:
-    """``get(fixture name) -> (database, value)``: the set-up of ``_BUILT_ONCE``, built at its first use."""
+def built_once(pg: TestServer, template_db: str) -> Iterator[BuiltOnce]:
+    """``get(name, build=None) -> (database, value)``: a set-up built at its first use, once per session.
+
+    ``name`` is a fixture of ``_BUILT_ONCE``, or the name of ``build``, a set-up
+    of a test module: listed in its ``BUILT_ONCE`` (``db_dsn`` below), or
+    cloned by a ``db_dsn`` of the module's own (``test_sql_merge_feature_row.py``,
+    one set-up per parameter). A name stands for one set-up, always built by
+    the same code.
+    """
     built: dict[str, tuple[str, int]] = {}
     with contextlib.ExitStack() as stack:
 
-        def get(name: str) -> tuple[str, int]:
+        def get(name: str, build: Callable[[Conn], int] | None = None) -> tuple[str, int]:
             if name not in built:
                 database, dsn = stack.enter_context(pg.database("tgsis_once", template_db))
                 with psycopg.connect(dsn) as conn:
-                    value = _BUILT_ONCE[name](conn)
+                    value = (build or _BUILT_ONCE[name])(conn)
                     conn.commit()
                 built[name] = (database, value)
             return built[name]
@@ -168,33 +198,57 @@ def db_dsn(
     request: pytest.FixtureRequest,
     make_database: Callable[..., str],
     template_db: str,
-    built_once: Callable[[str], tuple[str, int]],
+    built_once: BuiltOnce,
 ) -> str:
-    """The plugin's fresh database, or a clone of the set-up built once that the test asks for."""
-    asked = [name for name in _BUILT_ONCE if name in request.fixturenames]
-    assert len(asked) <= 1, f"a test's database is the clone of one set-up, not of {asked}"
-    return make_database(built_once(asked[0])[0] if asked else template_db)
+    """The plugin's fresh database, or a clone of the set-up built once that the test asks for.
+
+    The set-ups: ``_BUILT_ONCE``'s, and those a test module lists in its own
+    ``BUILT_ONCE`` (fixture name -> set-up), named ``module.fixture`` in
+    ``built_once``; the module's fixture of that name returns
+    ``built_once(f"{__name__}.fixture", set_up)[1]``.
+    """
+    asked: list[tuple[str, Callable[[Conn], int] | None]] = [
+        (name, None) for name in _BUILT_ONCE if name in request.fixturenames
+    ]
+    local: dict[str, Callable[[Conn], int]] = getattr(request.module, "BUILT_ONCE", {})
+    asked += [
+        (f"{request.module.__name__}.{name}", build) for name, build in local.items() if name in request.fixturenames
+    ]
+    assert len(asked) <= 1, f"a test's database is the clone of one set-up, not of {[a[0] for a in asked]}"
+    return make_database(built_once(*asked[0])[0] if asked else template_db)
 
 
 @pytest.fixture
-def fault_clone(db_dsn: str, built_once: Callable[[str], tuple[str, int]]) -> int:
+def fault_clone(db_dsn: str, built_once: BuiltOnce) -> int:
     """Geoid of ``make_fault``'s fault, already in the test's database (cloned, not built again)."""
     return built_once("fault_clone")[1]
 
 
 @pytest.fixture
-def three_regions_clone(db_dsn: str, built_once: Callable[[str], tuple[str, int]]) -> int:
+def three_regions_clone(db_dsn: str, built_once: BuiltOnce) -> int:
     """Geoid of ``three_regions``'s fault, already in the test's database (cloned, not built again)."""
     return built_once("three_regions_clone")[1]
 
 
 @pytest.fixture
-def series_clone(db_dsn: str, built_once: Callable[[str], tuple[str, int]]) -> int:
+def series_clone(db_dsn: str, built_once: BuiltOnce) -> int:
     """Geoid of ``make_series``'s surface at instants, already in the test's database (cloned, not built again)."""
     return built_once("series_clone")[1]
 
 
 @pytest.fixture
-def two_conflicts_clone(db_dsn: str, built_once: Callable[[str], tuple[str, int]]) -> int:
+def two_conflicts_clone(db_dsn: str, built_once: BuiltOnce) -> int:
     """Geoid of ``two_conflicts``'s fault, already in the test's database (cloned, not built again)."""
     return built_once("two_conflicts_clone")[1]
+
+
+@pytest.fixture
+def periods_clone(db_dsn: str, built_once: BuiltOnce) -> int:
+    """Geoid of ``make_periods``'s surface of two topology periods, already in the test's database (cloned)."""
+    return built_once("periods_clone")[1]
+
+
+@pytest.fixture
+def evolving_clone(db_dsn: str, built_once: BuiltOnce) -> int:
+    """Geoid of ``make_evolving``'s surface of one topology period, already in the test's database (cloned)."""
+    return built_once("evolving_clone")[1]

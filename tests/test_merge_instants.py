@@ -456,8 +456,8 @@ def test_an_instant_removed_on_one_side_only_is_removed(conn: Conn, series: int)
 
 
 @pytest.fixture
-def evolving(conn: Conn) -> int:
-    return make_evolving(conn)
+def evolving(conn: Conn, evolving_clone: int) -> int:
+    return evolving_clone  # make_evolving's, built once (tests/conftest.py)
 
 
 def _period(conn: Conn, version: str, geoid: int) -> dict[float, np.ndarray]:

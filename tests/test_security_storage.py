@@ -21,6 +21,7 @@ import pytest
 from psycopg import sql
 
 import tgsis
+from tests.conftest import BuiltOnce
 from tests.roles import Roles, login_roles
 from tests.synthetic import flat_grid
 from tgsis.db import features as F
@@ -31,19 +32,33 @@ from tgsis.errors import reraise
 Conn = psycopg.Connection[Any]
 
 
+def make_storage(admin: Conn) -> int:
+    """wells (versioned) and a feature class with one surface, written by the superuser (autocommit)."""
+    admin.autocommit = True
+    admin.execute("CREATE TABLE wells (id bigint PRIMARY KEY, name text NOT NULL, depth float8)")
+    admin.execute("INSERT INTO wells VALUES (1, 'w1', 10), (2, 'w2', 20)")
+    admin.execute("GRANT SELECT ON wells TO tgsis_reader")
+    admin.execute("GRANT INSERT, UPDATE, DELETE ON wells TO tgsis_editor")
+    tgsis.enable_versioning(admin, "wells", "id", "well")
+    F.create_feature_class(admin, "horizons", "SURFACE")
+    tgsis.enable_feature_versioning(admin)
+    return int(F.insert_feature(admin, "horizons", flat_grid(3, 0.0)))
+
+
+BUILT_ONCE = {"storage": make_storage}  # built once, cloned per test (db_dsn, tests/conftest.py)
+
+
 @pytest.fixture
-def roles(db_dsn: str) -> Iterator[Roles]:
-    """wells (versioned) and a feature class; alice's version a1 with an edit and a saved revision; DEFAULT
+def storage(db_dsn: str, built_once: BuiltOnce) -> int:
+    """Geoid of ``make_storage``'s surface, already in the test's database (cloned, not built again): it
+    needs no login role (the group roles tgsis_reader and tgsis_editor are the session's)."""
+    return built_once(f"{__name__}.storage", make_storage)[1]
+
+
+@pytest.fixture
+def roles(db_dsn: str, storage: int) -> Iterator[Roles]:
+    """``make_storage``'s wells and feature class; alice's version a1 with an edit and a saved revision; DEFAULT
     writable by editors. alice and bob are editors, rita a reader, nora logs in with no tgsis role."""
-    with psycopg.connect(db_dsn, autocommit=True) as admin:
-        admin.execute("CREATE TABLE wells (id bigint PRIMARY KEY, name text NOT NULL, depth float8)")
-        admin.execute("INSERT INTO wells VALUES (1, 'w1', 10), (2, 'w2', 20)")
-        admin.execute("GRANT SELECT ON wells TO tgsis_reader")
-        admin.execute("GRANT INSERT, UPDATE, DELETE ON wells TO tgsis_editor")
-        tgsis.enable_versioning(admin, "wells", "id", "well")
-        F.create_feature_class(admin, "horizons", "SURFACE")
-        tgsis.enable_feature_versioning(admin)
-        F.insert_feature(admin, "horizons", flat_grid(3, 0.0))
     with login_roles(
         db_dsn, {"alice": "tgsis_editor", "bob": "tgsis_editor", "rita": "tgsis_reader", "nora": "pg_read_all_settings"}
     ) as made:

@@ -11,6 +11,7 @@ rows counted and the refusals (SQLSTATE).
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from typing import Any
 
@@ -19,6 +20,7 @@ import pytest
 from psycopg import sql
 
 import tgsis
+from tests.conftest import BuiltOnce
 from tests.merge_data import curved_surface, move
 from tests.test_sql_merge_regions import NORTH, SOUTH, psql
 from tests.test_sql_merge_write import everything
@@ -100,11 +102,11 @@ def assert_same(theirs: tuple[Any, ...], mine: tuple[Any, ...]) -> None:
     assert mine[3] == theirs[3]
 
 
-@pytest.fixture(params=[True, False], ids=["parent-mesh-edit", "no-parent-mesh-edit"])
-def fault(conn: Conn, request: pytest.FixtureRequest) -> int:
+def make_fault(conn: Conn, parent_mesh_edit: bool) -> int:
     """A curved fault whose feature row holds properties of several types, in DEFAULT, and version e1 (committed).
 
-    The version moves vertices; the parent moves others, or (the second case) changes only the feature row.
+    The version moves vertices; the parent moves others, or (``parent_mesh_edit`` false) changes only the
+    feature row.
     """
     tgsis.create_feature_class(conn, "faults", "SURFACE", feature_properties=PROPERTIES)
     tgsis.enable_feature_versioning(conn)
@@ -122,10 +124,34 @@ def fault(conn: Conn, request: pytest.FixtureRequest) -> int:
     conn.commit()
     # both sides change the mesh in two regions apart
     move(conn, "e1", geoid, NORTH, (0.125, -3.3, 7.77))
-    if request.param:
+    if parent_mesh_edit:
         move(conn, "DEFAULT", geoid, SOUTH, (-1.1, 0.0, -2.9))
     conn.commit()
     return geoid
+
+
+def _built_fault(built_once: BuiltOnce, parent_mesh_edit: bool) -> tuple[str, int]:
+    """(database, geoid) of ``make_fault``'s set-up, built once per session and case (tests/conftest.py)."""
+    return built_once(
+        f"feature_row_fault[{parent_mesh_edit}]", functools.partial(make_fault, parent_mesh_edit=parent_mesh_edit)
+    )
+
+
+@pytest.fixture(params=[True, False], ids=["parent-mesh-edit", "no-parent-mesh-edit"])
+def parent_mesh_edit(request: pytest.FixtureRequest) -> bool:
+    return bool(request.param)
+
+
+@pytest.fixture
+def db_dsn(make_database: Callable[..., str], built_once: BuiltOnce, parent_mesh_edit: bool) -> str:
+    """Every test here starts from the fault: its database is a clone of ``make_fault``'s, built once."""
+    return make_database(_built_fault(built_once, parent_mesh_edit)[0])
+
+
+@pytest.fixture
+def fault(conn: Conn, built_once: BuiltOnce, parent_mesh_edit: bool) -> int:
+    """Geoid of ``make_fault``'s fault, already in the test's database (``db_dsn``)."""
+    return _built_fault(built_once, parent_mesh_edit)[1]
 
 
 def _parent_edits(conn: Conn, geoid: int, version: str = "DEFAULT") -> None:

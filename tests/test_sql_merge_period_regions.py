@@ -41,8 +41,8 @@ _REGION = (
 
 
 @pytest.fixture
-def periods(conn: Conn) -> int:
-    return make_periods(conn)
+def periods(conn: Conn, periods_clone: int) -> int:
+    return periods_clone  # make_periods's, built once (tests/conftest.py)
 
 
 def _engine_regions(conn: Conn, version: str, geoid: int, m: float, t: float) -> list[tuple[Any, ...]]:

@@ -70,8 +70,8 @@ def make_periods(conn: Conn) -> int:
 
 
 @pytest.fixture
-def periods(conn: Conn) -> int:
-    return make_periods(conn)
+def periods(conn: Conn, periods_clone: int) -> int:
+    return periods_clone  # make_periods's, built once (tests/conftest.py)
 
 
 def _sql(conn: Conn, version: str, text: str, args: tuple[Any, ...] = ()) -> None:

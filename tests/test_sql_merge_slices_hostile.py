@@ -19,6 +19,7 @@ import pytest
 from psycopg import sql
 
 import tgsis
+from tests.conftest import BuiltOnce
 from tests.merge_data import curved_surface
 from tests.roles import merges_as
 from tests.test_merge_instants import CHILD_SHIFT, NORTH, PARENT_SHIFT, SOUTH, TIMES, _porosity, _shape, move
@@ -64,6 +65,21 @@ def _sql(conn: Conn, version: str, text: Any, args: tuple[Any, ...] = ()) -> Non
     conn.commit()
 
 
+def make_horizons(conn: Conn) -> int:
+    """``_class`` then ``_series`` with their defaults (committed): the set-up most cases here start from."""
+    _class(conn)
+    return _series(conn)
+
+
+BUILT_ONCE = {"horizons": make_horizons}  # built once, cloned per test (db_dsn, tests/conftest.py)
+
+
+@pytest.fixture
+def horizons(db_dsn: str, built_once: BuiltOnce) -> int:
+    """Geoid of ``make_horizons``'s surface, already in the test's database (cloned, not built again)."""
+    return built_once(f"{__name__}.horizons", make_horizons)[1]
+
+
 def _same_or_refused_by_name(conn: Conn, version: str, action: str = "merge") -> tuple[Any, ...]:
     """The psql merge writes what Python writes, or refuses (TG302) writing nothing."""
     before = everything(conn)
@@ -98,10 +114,9 @@ def _same_or_refused_by_name(conn: Conn, version: str, action: str = "merge") ->
     ],
 )
 def test_an_instant_added_at_a_time_a_bit_apart_merges_exactly_as_in_python(
-    conn: Conn, added: float, side: str
+    conn: Conn, horizons: int, added: float, side: str
 ) -> None:
-    _class(conn)
-    geoid = _series(conn)
+    geoid = horizons
     tgsis.create_version(conn, "e1")
     conn.commit()
     _add(conn, side, geoid, added)
@@ -111,10 +126,9 @@ def test_an_instant_added_at_a_time_a_bit_apart_merges_exactly_as_in_python(
     assert_same_merge(conn, "e1")
 
 
-def test_instants_at_zero_and_minus_zero_on_both_sides(conn: Conn) -> None:
+def test_instants_at_zero_and_minus_zero_on_both_sides(conn: Conn, horizons: int) -> None:
     """The parent adds instant 0.0, the version -0.0 (one instant for PostgreSQL and numpy), alike otherwise."""
-    _class(conn)
-    geoid = _series(conn)
+    geoid = horizons
     tgsis.create_version(conn, "e1")
     conn.commit()
     _add(conn, "DEFAULT", geoid, 0.0)
@@ -288,9 +302,8 @@ def test_vertex_properties_of_other_types_merge_exactly_as_in_python(
 # ---------------------------------------------------------------------------- versions
 
 
-def test_a_version_whose_parent_is_not_default(conn: Conn) -> None:
-    _class(conn)
-    geoid = _series(conn)
+def test_a_version_whose_parent_is_not_default(conn: Conn, horizons: int) -> None:
+    geoid = horizons
     tgsis.create_version(conn, "e1")
     tgsis.create_version(conn, "e2", "e1")
     conn.commit()
@@ -356,14 +369,15 @@ def test_a_class_without_any_property(conn: Conn) -> None:
 # ---------------------------------------------------------------------------- solutions of a slice's region from psql
 
 
-def test_a_psql_solution_with_rows_for_a_region_of_an_instant_is_taken_and_merges_as_in_python(conn: Conn) -> None:
+def test_a_psql_solution_with_rows_for_a_region_of_an_instant_is_taken_and_merges_as_in_python(
+    conn: Conn, horizons: int
+) -> None:
     """A psql user records a manual mesh with its rows (as for a model-1 region) for a region of an instant: the
     rows are taken (they were refused TG100 while the psql merge applied only parent, child and base there), and
     the psql merge applies them as the Python merge applies the .npz."""
     from tgsis.db.regions import _sql_rows, state_to_npz
 
-    _class(conn)
-    geoid = _series(conn)
+    geoid = horizons
     tgsis.create_version(conn, "e1")
     conn.commit()
     move(conn, "e1", geoid, 2.0, NORTH, CHILD_SHIFT)
@@ -417,9 +431,8 @@ def test_a_negative_vertex_id_a_psql_user_stored_merges_exactly_as_in_python_mod
     assert any(r[1] == str(new_id) for r in mine[2]["tgsis.vrtx_ver"]), "the new vertex is kept"
 
 
-def test_a_negative_vertex_id_at_an_instant_merges_exactly_as_in_python(conn: Conn) -> None:
-    _class(conn)
-    geoid = _series(conn)
+def test_a_negative_vertex_id_at_an_instant_merges_exactly_as_in_python(conn: Conn, horizons: int) -> None:
+    geoid = horizons
     tgsis.create_version(conn, "e1")
     conn.commit()
     _sql(
@@ -485,11 +498,12 @@ MORE: dict[str, list[tuple[str, str]]] = {
 
 
 @pytest.mark.parametrize("scenario", list(MORE))
-def test_more_scenarios_merge_in_psql_exactly_as_in_python_or_are_refused_by_name(conn: Conn, scenario: str) -> None:
+def test_more_scenarios_merge_in_psql_exactly_as_in_python_or_are_refused_by_name(
+    conn: Conn, horizons: int, scenario: str
+) -> None:
     from tests.test_sql_merge_slices import _step
 
-    _class(conn)
-    geoid = _series(conn)
+    geoid = horizons
     tgsis.create_version(conn, "e1")
     conn.commit()
     for version, step in MORE[scenario]:
@@ -549,14 +563,15 @@ def test_object_merge_refusal_is_not_public_and_an_editor_still_merges_in_psql(c
 
 
 @pytest.mark.parametrize("side", ["DEFAULT", "e1"])
-def test_an_instant_added_then_removed_in_a_later_revision_merges_as_in_python(conn: Conn, side: str) -> None:
+def test_an_instant_added_then_removed_in_a_later_revision_merges_as_in_python(
+    conn: Conn, horizons: int, side: str
+) -> None:
     """Instant 4 added on one side, its revision frozen (a version made from it), then removed: its rows are in the
     storage, seen by none of the three states. No state has it: nothing to merge there, not an object-level
     conflict."""
     from tests.test_sql_merge_slices import _step
 
-    _class(conn)
-    geoid = _series(conn)
+    geoid = horizons
     tgsis.create_version(conn, "e1")
     conn.commit()
     _step(conn, side, "add 4", geoid)
@@ -570,11 +585,10 @@ def test_an_instant_added_then_removed_in_a_later_revision_merges_as_in_python(c
 
 
 @pytest.mark.parametrize("side", ["DEFAULT", "e1"])
-def test_an_instant_removed_in_psql_by_its_times_row_alone(conn: Conn, side: str) -> None:
+def test_an_instant_removed_in_psql_by_its_times_row_alone(conn: Conn, horizons: int, side: str) -> None:
     """A psql user deletes instant 2's tgsis.times row only (its vertex, triangle and property rows stay): the
     instant is gone on that side; the other side moves another instant."""
-    _class(conn)
-    geoid = _series(conn)
+    geoid = horizons
     tgsis.create_version(conn, "e1")
     conn.commit()
     _sql(conn, side, "DELETE FROM tgsis.times WHERE geoid = %s AND times = 2", (geoid,))
@@ -590,15 +604,14 @@ def test_an_instant_removed_in_psql_by_its_times_row_alone(conn: Conn, side: str
 @pytest.mark.parametrize("revoked", ["INSERT", "UPDATE", "DELETE", "INSERT, UPDATE, DELETE", "INSERT on the storage"])
 @pytest.mark.parametrize("table", ["horizons_cellpros", "horizons_pros"])
 def test_a_role_that_may_not_write_a_property_table_is_refused_as_in_python(
-    conn: Conn, db_dsn: str, table: str, revoked: str
+    conn: Conn, horizons: int, db_dsn: str, table: str, revoked: str
 ) -> None:
     """The editor may change the feature but not the class's vertex (per-instant) property rows: the merge brings
     the parent's property edits into the version; psql must refuse as the Python merge does, writing nothing."""
     from tests.roles import login_roles
     from tests.test_sql_merge_slices import _step
 
-    _class(conn)
-    geoid = _series(conn)
+    geoid = horizons
     tgsis.create_version(conn, "e1")
     conn.commit()
     _step(conn, "DEFAULT", "cells 2" if table == "horizons_cellpros" else "throw 2 25", geoid)
