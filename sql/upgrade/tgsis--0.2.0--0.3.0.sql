@@ -117,6 +117,11 @@ UPDATE tgsis.model_tables t SET chunkcolumn = c.chunkcolumn, chunkrefs = c.chunk
  WHERE t.tablename = c.tablename;
 -- @handled model1/storage.sql
 
+-- ---- issue40-chunk-layout: the chunk layout of a table cannot change under its chunk table (a trigger on
+-- tgsis.model_tables; chunks/chunk_layout_guard.sql says why): made whole here, before the generated
+-- part comments on the trigger
+-- @include chunks/chunk_layout_guard.sql
+
 -- ---- issue36-timerange: tgsis.timerange becomes a domain refusing NaN bounds over the range type
 -- tgsis.modeltime_range (temporal/timerange.sql says why). No table stores one. The functions over the
 -- old range type are dropped by name (the generated part below makes them again), then the type, without
