@@ -294,6 +294,7 @@ WITH k AS (
 ), ins AS (
     INSERT INTO {chunk} ({inscols})
     SELECT {insvals} FROM fresh n
+     ORDER BY {n_K}  -- new keys in key order, as the locks: two writers adding the same chunks do not deadlock
     ON CONFLICT DO NOTHING
     RETURNING {K}
 )
