@@ -359,7 +359,7 @@ def download_tables(
 ) -> dict[str, dict[int, ObjectRows]]:
     """:func:`download_chunks` of several tables, one COPY each, all in one snapshot (:func:`one_snapshot`).
 
-    Outside a transaction the COPYs run in one ``REPEATABLE READ READ ONLY`` transaction: a writer that
+    Outside a transaction the COPYs run in one read-only repeatable-read transaction: a writer that
     commits between them is seen by none or all of them. Inside the caller's, they see what its isolation
     level gives.
 
