@@ -212,3 +212,71 @@ def test_histories_the_authors_did_not_build_convert_and_agree_in_every_set(conn
     assert int(conn.execute("SELECT tgsis.rows_to_chunks('vrtx')").fetchone()[0]) > 0  # type: ignore[index]
     assert _every_set_agrees(conn, [geoid, plain]) >= 3
     conn.rollback()
+
+
+SHAPES = [
+    # UPDATE ... FROM, keys kept (queued) and a key moved (per row)
+    "UPDATE {v} t SET x = t.x + s.d FROM (VALUES (1, 0.5), (2, 1.5), (1030, 2.5)) s(id, d) "
+    "WHERE t.geoid = {g} AND t.vrtxid = s.id",
+    "UPDATE {v} t SET vrtxid = t.vrtxid + 5000 FROM (VALUES (3), (4)) s(id) WHERE t.geoid = {g} AND t.vrtxid = s.id",
+    # DELETE ... USING a join that meets one row twice
+    "DELETE FROM {v} t USING (VALUES (5), (5), (6)) s(id) WHERE t.geoid = {g} AND t.vrtxid = s.id",
+    # INSERT ... SELECT of many rows over several chunks, holes between
+    "INSERT INTO {v} SELECT {g}, 20000 + 3 * i, i, -i, i * 0.125 FROM generate_series(0, 1499) i",
+    # keys kept in three chunks at once (queued, written after the statement)
+    "UPDATE {v} SET x = x + 1 WHERE geoid = {g} AND vrtxid IN (1, 20000, 24497)",
+    # ON CONFLICT on a key that is there, and ON CONFLICT DO UPDATE (no arbiter index on a view)
+    "INSERT INTO {v} VALUES ({g}, 0, 1, 2, 3) ON CONFLICT DO NOTHING",
+    "INSERT INTO {v} VALUES ({g}, 9999, 1, 2, 3) ON CONFLICT (geoid, vrtxid) DO UPDATE SET x = excluded.x",
+    # chained writable CTEs: delete, then insert what was deleted elsewhere, then update another row
+    "WITH d AS (DELETE FROM {v} WHERE geoid = {g} AND vrtxid IN (7, 8) RETURNING *), "
+    "i AS (INSERT INTO {v} SELECT geoid, vrtxid + 7000, x, y, z FROM d RETURNING *), "
+    "u AS (UPDATE {v} SET z = -z WHERE geoid = {g} AND vrtxid = 9 RETURNING *) "
+    "SELECT (SELECT count(*) FROM i), (SELECT count(*) FROM u)",
+    # a function that writes, called per row by an UPDATE of other rows
+    "UPDATE {v} SET y = y + pg_temp.bump_{n}({g}, vrtxid) WHERE geoid = {g} AND vrtxid IN (10, 11)",
+    # ... and one that writes the very rows the UPDATE is changing
+    "UPDATE {v} SET y = y + pg_temp.bump_{n}({g}, vrtxid - 100) WHERE geoid = {g} AND vrtxid IN (12, 13)",
+    # a key moved onto a key that is there
+    "UPDATE {v} SET vrtxid = 15 WHERE geoid = {g} AND vrtxid = 14",
+]
+
+
+def test_psql_statement_shapes_through_the_face_do_what_today_s_view_does(conn: Conn, fault_clone: int) -> None:
+    """The same statements on today's versioned view and on the face over the converted rows, in a child."""
+    geoid = fault_clone
+    conn.execute("SELECT tgsis.create_chunk_table('vrtx'), tgsis.create_chunk_view('vrtx')")
+    conn.execute("SELECT tgsis.rows_to_chunks('vrtx')")
+    conn.execute("SELECT tgsis.create_chunk_face('vrtx', 'vrtx_face')")
+    conn.commit()
+    for view in ("vrtx", "vrtx_face"):
+        conn.execute(
+            f"CREATE FUNCTION pg_temp.bump_{view}(g bigint, id bigint) RETURNS double precision LANGUAGE sql AS "
+            f"$$UPDATE tgsis.{view} SET x = x + 1 WHERE geoid = g AND vrtxid = id + 100 RETURNING 1.0::float8$$"
+        )
+    conn.commit()
+    tgsis.goto_version(conn, "e1")
+    conn.commit()
+    outcomes: dict[str, list[Any]] = {}
+    for view in ("vrtx", "vrtx_face"):
+        outcomes[view] = []
+        for shape in SHAPES:
+            statement = shape.format(v=f"tgsis.{view}", g=geoid, n=view)
+            try:
+                with conn.transaction():
+                    cur = conn.execute(statement)
+                    outcomes[view].append((cur.rowcount, cur.fetchall() if cur.description else None))
+            except psycopg.Error as exc:
+                outcomes[view].append(exc.sqlstate)
+    cols = "geoid, vrtxid, float8send(x), float8send(y), float8send(z)"
+    rows = conn.execute(f"SELECT {cols} FROM tgsis.vrtx WHERE geoid = %s ORDER BY 1, 2", (geoid,)).fetchall()
+    face = conn.execute(f"SELECT {cols} FROM tgsis.vrtx_face WHERE geoid = %s ORDER BY 1, 2", (geoid,)).fetchall()
+    conn.rollback()
+    assert outcomes["vrtx_face"] == outcomes["vrtx"]
+    assert len(face) == len(rows) and face == rows
+    conn.execute("SELECT tgsis.goto_version('DEFAULT')")
+    parent = conn.execute(f"SELECT {cols} FROM tgsis.vrtx WHERE geoid = %s ORDER BY 1, 2", (geoid,)).fetchall()
+    assert conn.execute(f"SELECT {cols} FROM tgsis.vrtx_face WHERE geoid = %s ORDER BY 1, 2", (geoid,)).fetchall() == (
+        parent
+    )
+    conn.rollback()
