@@ -280,3 +280,62 @@ def test_psql_statement_shapes_through_the_face_do_what_today_s_view_does(conn: 
         parent
     )
     conn.rollback()
+
+
+def test_two_sessions_locking_two_chunks_in_opposite_orders_deadlock_and_lose_nothing(db_dsn: str, conn: Conn) -> None:
+    """A: chunk 0 then chunk 1; B: chunk 1 then chunk 0, through the face. One is 40P01 and rolls back whole,
+    the other's writes are all kept: never a lost or half-applied update."""
+    tgsis.enable_feature_versioning(conn)
+    tgsis.create_feature_class(conn, "alpha", "SURFACE")
+    geoid = tgsis.insert_feature(conn, "alpha", Surface(np.eye(3), np.array([[0, 1, 2]])))
+    conn.commit()
+    conn.execute("SELECT tgsis.create_chunk_table('vrtx'), tgsis.create_chunk_view('vrtx')")
+    conn.execute("SELECT tgsis.create_chunk_face('vrtx', 'vrtx_face')")
+    _face_rows(conn, geoid, 2048)
+    conn.commit()
+    tgsis.create_version(conn, "child")
+    conn.commit()
+    a = psycopg.connect(db_dsn)
+    b = psycopg.connect(db_dsn)
+    upd = "UPDATE tgsis.vrtx_face SET z = z + {d} WHERE geoid = %s AND vrtxid = %s"
+    results: dict[str, str] = {}
+
+    def cross(session: Conn, name: str, vrtxid: int, d: int) -> None:
+        try:
+            session.execute(upd.format(d=d), (geoid, vrtxid))
+            session.commit()
+            results[name] = "ok"
+        except psycopg.Error as exc:
+            session.rollback()
+            results[name] = str(exc.sqlstate)
+
+    try:
+        for s in (a, b):
+            tgsis.goto_version(s, "child")
+            s.commit()
+        a.execute(upd.format(d=1), (geoid, 10))  # A holds chunk 0
+        b.execute(upd.format(d=100), (geoid, 1030))  # B holds chunk 1
+        threads = [
+            threading.Thread(target=cross, args=(a, "a", 1031, 1)),  # A waits for chunk 1
+            threading.Thread(target=cross, args=(b, "b", 11, 100)),  # B waits for chunk 0: a deadlock
+        ]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join(60)
+    finally:
+        a.close()
+        b.close()
+    tgsis.goto_version(conn, "child")
+    z = dict(
+        conn.execute(
+            "SELECT vrtxid, z FROM tgsis.vrtx_face WHERE geoid = %s AND vrtxid IN (10, 11, 1030, 1031)", (geoid,)
+        ).fetchall()
+    )
+    conn.rollback()
+    base = {i: 0.5 + i for i in (10, 11, 1030, 1031)}
+    assert sorted(results.values()) == ["40P01", "ok"], results
+    if results["a"] == "ok":
+        assert z == {**base, 10: base[10] + 1, 1031: base[1031] + 1}
+    else:
+        assert z == {**base, 11: base[11] + 100, 1030: base[1030] + 100}
