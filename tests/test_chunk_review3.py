@@ -339,3 +339,50 @@ def test_two_sessions_locking_two_chunks_in_opposite_orders_deadlock_and_lose_no
         assert z == {**base, 10: base[10] + 1, 1031: base[1031] + 1}
     else:
         assert z == {**base, 11: base[11] + 100, 1030: base[1030] + 100}
+
+
+def test_keyed_reads_agree_with_the_face_for_odd_ids_in_every_view(conn: Conn, fault_clone: int) -> None:
+    """tgsis.vertex / tgsis.vertices against the face: absent, repeated, NULL, negative and huge ids, in a
+    child, in DEFAULT and viewing an older revision."""
+    geoid = fault_clone
+    move(conn, "e1", geoid, [0, 1, 2], (1.0, 1.0, 1.0))
+    conn.commit()
+    tgsis.goto_version(conn, "e1")
+    tgsis.save_revision(conn, "moved once")
+    conn.commit()
+    move(conn, "e1", geoid, [1, 2], (5.0, 5.0, 5.0))
+    with tgsis.in_version(conn, "e1"):
+        conn.execute("DELETE FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = 2", (geoid,))
+        conn.commit()
+    saved = conn.execute("SELECT revision FROM tgsis.revisions WHERE name = 'moved once'").fetchone()
+    assert saved is not None
+    conn.execute("SELECT tgsis.create_chunk_table('vrtx'), tgsis.create_chunk_view('vrtx')")
+    conn.execute("SELECT tgsis.rows_to_chunks('vrtx')")
+    conn.execute("SELECT tgsis.create_chunk_face('vrtx', 'vrtx_face')")
+    ids = [2, 1, 1, None, -1, -1024, 2**63 - 1, 2**62, 1023, 1024, 0, 999999]
+    for goto, args in (
+        ("goto_version", ("e1", True)),
+        ("goto_version", ("DEFAULT", True)),
+        ("goto_revision", ("e1", saved[0], True)),
+    ):
+        conn.execute(f"SELECT tgsis.{goto}({', '.join(['%s'] * len(args))})", args)
+        face = {
+            r[0]: r[1:]
+            for r in conn.execute(
+                "SELECT vrtxid, float8send(x), float8send(y), float8send(z) FROM tgsis.vrtx_face WHERE geoid = %s",
+                (geoid,),
+            ).fetchall()
+        }
+        want = [(i, *face[i]) for i in ids if i is not None and i in face]
+        got = conn.execute(
+            "SELECT vrtxid, float8send(x), float8send(y), float8send(z) FROM tgsis.vertices(%s, %s)", (geoid, ids)
+        ).fetchall()
+        assert got == want, (goto, args)
+        for i in ids:
+            one = conn.execute(
+                "SELECT float8send(x), float8send(y), float8send(z) FROM tgsis.vertex(%s, %s)", (geoid, i)
+            ).fetchall()
+            assert one == ([face[i]] if i in face else []), (goto, args, i)
+    assert conn.execute("SELECT count(*) FROM tgsis.vertices(%s, NULL)", (geoid,)).fetchone() == (0,)
+    assert conn.execute("SELECT count(*) FROM tgsis.vertices(NULL, ARRAY[1])").fetchone() == (0,)
+    conn.rollback()
