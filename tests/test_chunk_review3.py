@@ -386,3 +386,32 @@ def test_keyed_reads_agree_with_the_face_for_odd_ids_in_every_view(conn: Conn, f
     assert conn.execute("SELECT count(*) FROM tgsis.vertices(%s, NULL)", (geoid,)).fetchone() == (0,)
     assert conn.execute("SELECT count(*) FROM tgsis.vertices(NULL, ARRAY[1])").fetchone() == (0,)
     conn.rollback()
+
+
+def test_a_face_made_on_unversioned_storage_shows_the_visible_chunks_once_versioning_is_enabled(conn: Conn) -> None:
+    """The face decided at creation whether to filter by visibility: made before enable_feature_versioning,
+    DEFAULT's face showed each vertex twice and a child's change (the writer, which decides per call, had
+    written the child's chunk version correctly). tgsis.vertex, deciding per call, was right."""
+    tgsis.create_feature_class(conn, "alpha", "SURFACE")
+    geoid = tgsis.insert_feature(conn, "alpha", Surface(np.eye(3), np.array([[0, 1, 2]])))
+    conn.commit()
+    conn.execute("SELECT tgsis.create_chunk_table('vrtx'), tgsis.create_chunk_view('vrtx')")
+    conn.execute("SELECT tgsis.rows_to_chunks('vrtx')")
+    conn.execute("SELECT tgsis.create_chunk_face('vrtx', 'vrtx_face')")
+    conn.commit()
+    face = "SELECT vrtxid, x, y, z FROM tgsis.vrtx_face WHERE geoid = %s ORDER BY 1"
+    rows = "SELECT vrtxid, x, y, z FROM tgsis.vrtx WHERE geoid = %s ORDER BY 1"
+    assert conn.execute(face, (geoid,)).fetchall() == conn.execute(rows, (geoid,)).fetchall()
+    tgsis.enable_feature_versioning(conn)
+    tgsis.create_version(conn, "child")
+    conn.commit()
+    tgsis.goto_version(conn, "child")
+    assert conn.execute("UPDATE tgsis.vrtx_face SET x = 42 WHERE geoid = %s AND vrtxid = 1", (geoid,)).rowcount == 1
+    conn.commit()
+    child = conn.execute(face, (geoid,)).fetchall()
+    assert [r[:2] for r in child] == [(0, 1.0), (1, 42.0), (2, 0.0)]
+    tgsis.goto_version(conn, "DEFAULT")
+    conn.commit()
+    assert conn.execute(face, (geoid,)).fetchall() == conn.execute(rows, (geoid,)).fetchall()
+    assert conn.execute("SELECT x FROM tgsis.vertex(%s, 1)", (geoid,)).fetchall() == [(0.0,)]
+    conn.rollback()
