@@ -11,9 +11,13 @@ from typing import Any
 
 import numpy as np
 import psycopg
+import pytest
+from psycopg.conninfo import conninfo_to_dict, make_conninfo
 
 import tgsis
 from tests.merge_data import move
+from tgsis.db._chunk_transfer import ObjectRows, download_tables, upload_chunks
+from tgsis.errors import InvalidInputError
 from tgsis.mesh import Surface
 
 Conn = psycopg.Connection[Any]
@@ -415,3 +419,28 @@ def test_a_face_made_on_unversioned_storage_shows_the_visible_chunks_once_versio
     assert conn.execute(face, (geoid,)).fetchall() == conn.execute(rows, (geoid,)).fetchall()
     assert conn.execute("SELECT x FROM tgsis.vertex(%s, 1)", (geoid,)).fetchall() == [(0.0,)]
     conn.rollback()
+
+
+def test_a_side_connection_to_another_database_is_refused_not_read(db_dsn: str, conn: Conn) -> None:
+    """download_tables(side=) with the same role on another database of the server (one where tgsis's tables
+    would hold other objects): refused by name before anything is read (it was PostgreSQL's 0A000 from the
+    second connection's thread, after the first tables' COPYs)."""
+
+    conn.execute("SELECT tgsis.create_chunk_table('vrtx'), tgsis.create_chunk_table('trgl')")
+    ids = np.arange(10)
+    upload_chunks(conn, "vrtx", [ObjectRows(7, ids, {"x": ids * 1.0, "y": ids * 2.0, "z": ids * 3.0})])
+    conn.commit()
+    other = f"{conninfo_to_dict(db_dsn)['dbname']}_r3side"
+    with psycopg.connect(db_dsn, autocommit=True) as admin:
+        admin.execute(f'CREATE DATABASE "{other}" TEMPLATE template0')
+    try:
+        side = psycopg.connect(make_conninfo(db_dsn, dbname=other))
+        try:
+            with pytest.raises(InvalidInputError, match="to database"):
+                download_tables(conn, {"vrtx": [7], "trgl": [7]}, side=side)
+        finally:
+            side.close()
+    finally:
+        conn.rollback()
+        with psycopg.connect(db_dsn, autocommit=True) as admin:
+            admin.execute(f'DROP DATABASE "{other}"')
