@@ -444,3 +444,37 @@ def test_a_side_connection_to_another_database_is_refused_not_read(db_dsn: str, 
         conn.rollback()
         with psycopg.connect(db_dsn, autocommit=True) as admin:
             admin.execute(f'DROP DATABASE "{other}"')
+
+
+def test_a_hostile_search_path_changes_nothing_the_face_and_keyed_reads_do(conn: Conn, fault_clone: int) -> None:
+    """Relations and functions named like the internals, in pg_temp and public, first on the search path."""
+    geoid = fault_clone
+    conn.execute("SELECT tgsis.create_chunk_table('vrtx'), tgsis.create_chunk_view('vrtx')")
+    conn.execute("SELECT tgsis.rows_to_chunks('vrtx')")
+    conn.execute("SELECT tgsis.create_chunk_face('vrtx', 'vrtx_face')")
+    conn.commit()
+    tgsis.goto_version(conn, "e1")
+    conn.commit()
+    read = "SELECT vrtxid, float8send(x) FROM tgsis.vrtx_face WHERE geoid = %s ORDER BY 1"
+    before = conn.execute(read, (geoid,)).fetchall()
+    one = conn.execute("SELECT float8send(x) FROM tgsis.vertex(%s, 3)", (geoid,)).fetchall()
+    for name in ("vrtx_chunk", "versioned_tables", "model_tables", "versions", "revisions"):
+        conn.execute(f"CREATE TEMP TABLE {name} (geoid bigint, chunk bigint, revision integer, tablename text)")
+        conn.execute(f"CREATE TABLE public.{name} (geoid bigint, chunk bigint, revision integer, tablename text)")
+    for fn in ("get_revisions", "write_chunk_rows", "check_class_write", "write_revision"):
+        conn.execute(f"CREATE FUNCTION public.{fn}(variadic anyarray) RETURNS integer[] LANGUAGE sql AS 'SELECT NULL'")
+    conn.execute(
+        "CREATE FUNCTION public.get_revisions(boolean) RETURNS integer[] LANGUAGE sql AS 'SELECT ''{0}''::int[]'"
+    )
+    conn.execute("SET search_path = pg_temp, public, tgsis, pg_catalog")
+    assert conn.execute(read, (geoid,)).fetchall() == before
+    assert conn.execute("SELECT float8send(x) FROM tgsis.vertex(%s, 3)", (geoid,)).fetchall() == one
+    assert conn.execute("UPDATE tgsis.vrtx_face SET x = 7 WHERE geoid = %s AND vrtxid = 3", (geoid,)).rowcount == 1
+    assert conn.execute("INSERT INTO tgsis.vrtx_face VALUES (%s, 5000, 1, 2, 3)", (geoid,)).rowcount == 1
+    conn.execute("RESET search_path")
+    assert conn.execute("SELECT x FROM tgsis.vertex(%s, 3)", (geoid,)).fetchall() == [(7.0,)]
+    assert conn.execute("SELECT x, y, z FROM tgsis.vertex(%s, 5000)", (geoid,)).fetchall() == [(1.0, 2.0, 3.0)]
+    conn.execute("SELECT tgsis.goto_version('DEFAULT', true)")
+    assert conn.execute("SELECT float8send(x) FROM tgsis.vertex(%s, 3)", (geoid,)).fetchall() != []
+    assert conn.execute("SELECT count(*) FROM tgsis.vertex(%s, 5000)", (geoid,)).fetchone() == (0,)
+    conn.rollback()
