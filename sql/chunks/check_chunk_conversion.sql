@@ -35,6 +35,8 @@ DECLARE
     v_rextra   text := '';  -- unversioned: the revision and lastrevs a chunk version must have, against its own
     v_cextra   text := '';
     v_bad      record;
+    v_enc      text[];  -- the encoding's conditions on a chunk version c
+    v_len      text;    -- its length: the first value array's
 BEGIN
     SELECT * INTO v_reg FROM tgsis.model_tables t WHERE t.tablename = p_table;
     PERFORM FROM tgsis.chunk_columns(p_table);  -- TG200 / TG100
@@ -50,6 +52,37 @@ BEGIN
                                       ELSE format('r.%I', c.name) END, ', ' ORDER BY c.colorder)
                  FROM tgsis.chunk_columns(p_table) c);
     v_versioned := EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table);
+    -- the encoding of every chunk version
+    v_len := (SELECT CASE WHEN c.role = 'float' THEN format('cardinality(c.%I)', c.name)
+                          ELSE format('cardinality(coalesce(c.%I, c.%I))', c.name, c.name || '_wide') END
+                FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref') ORDER BY c.colorder LIMIT 1);
+    v_enc := ARRAY[format('%s BETWEEN 1 AND %s', v_len, v_reg.chunksize),
+                   format('(c.holes IS NULL OR (cardinality(c.holes) > 0 AND NOT (%s = ANY (c.holes))))', v_len)]
+          || ARRAY(SELECT format('(c.%1$I IS NULL OR (array_ndims(c.%1$I) = 1 AND array_lower(c.%1$I, 1) = 1 '
+                                 'AND cardinality(c.%1$I) = %2$s AND ARRAY(SELECT u.o::smallint FROM unnest(c.%1$I) '
+                                 'WITH ORDINALITY AS u(v, o) WHERE u.v IS NULL ORDER BY u.o) = coalesce(c.holes, ''{}'')))',
+                                 a.col, v_len)
+                     FROM (SELECT c.name AS col, c.colorder, 0 AS w FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref')
+                           UNION ALL
+                           SELECT c.name || '_wide', c.colorder, 1 FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref') a
+                    ORDER BY a.w, a.colorder)
+          || ARRAY(SELECT format('c.%I IS NOT NULL', c.name) FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'float')
+          || ARRAY(SELECT format('(c.vbase IS NOT NULL) = (c.%1$I IS NOT NULL) AND (c.vbase IS NULL) = (c.%2$I IS NOT NULL)',
+                                 c.name, c.name || '_wide')
+                     FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref');
+    EXECUTE format('SELECT concat_ws(%1$L, %2$s) AS object, c.chunk, c.revision, count(*) OVER () AS n FROM tgsis.%3$I c '
+                   'WHERE NOT coalesce(%4$s, false) ORDER BY 1, 2, 3 LIMIT 1',
+                   ', ', (SELECT string_agg(format('%L || c.%I', k || ' ', k), ', ') FROM unnest(v_keys) AS k),
+                   p_table || '_chunk', array_to_string(v_enc, ' AND ')) INTO v_bad;
+    IF v_bad.chunk IS NOT NULL THEN
+        RAISE EXCEPTION 'a chunk of tgsis.% is not encoded as its readers read it: object %, chunk %, revision %',
+                        quote_ident(p_table), v_bad.object, v_bad.chunk, v_bad.revision
+            USING ERRCODE = 'TG000',
+                  DETAIL = format('%s chunk version(s) of tgsis.%I with arrays not one-dimensional from 1, of unequal length, '
+                                  'ending on a hole, NULL elsewhere than at their holes, or refs both relative and absolute.',
+                                  v_bad.n, p_table || '_chunk'),
+                  HINT = 'nothing was converted; report it with the table, object, chunk and set';
+    END IF;
     IF v_versioned THEN
         v_sets := 'SELECT format(''the working set of version %L'', v.name) AS label, v.workingset AS revs FROM tgsis.versions v
                    UNION ALL

@@ -378,7 +378,7 @@ def download_tables(
     Raises
     ------
     InvalidInputError
-        ``side`` logs in as another role than ``conn``, or is inside a transaction.
+        ``side`` logs in as another role than ``conn``, to another database, or is inside a transaction.
     """
     wanted = {table: list(dict.fromkeys(int(g) for g in geoids)) for table, geoids in requests.items()}
     idle = psycopg.pq.TransactionStatus.IDLE
@@ -388,9 +388,16 @@ def download_tables(
         layouts = {table: chunk_table(conn, table) for table in wanted}
         pending = None
         if parallel and side is not None:
-            row = conn.execute("SELECT pg_export_snapshot(), current_user::text, tgsis.get_revisions(true)").fetchone()
+            row = conn.execute(
+                "SELECT pg_export_snapshot(), current_user::text, tgsis.get_revisions(true), current_database()::text"
+            ).fetchone()
             assert row is not None
-            snapshot, role, revisions = row
+            snapshot, role, revisions, database = row
+            if side.info.dbname != database:
+                raise InvalidInputError(
+                    f"the second connection of a download is to database {side.info.dbname!r}, not {database!r}",
+                    detail="a snapshot is shared within one database only",
+                )
             last = list(wanted)[-1]
             pending = pool.submit(_side_copy, side, snapshot, role, layouts[last], wanted[last], revisions)
             wanted = {table: geoids for table, geoids in wanted.items() if table != last}
