@@ -407,6 +407,11 @@ def test_the_decoded_face_reads_the_largest_ids(conn: Conn) -> None:
     conn.execute("SELECT tgsis.write_chunk_rows('trgl', 'pg_temp.tri')")
     got = conn.execute("SELECT trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.trgl_chunk_rows ORDER BY 1").fetchall()
     assert got == [(0, top, 0, 1), (top, top - 2, top, top - 1)]
+    # the relational face decodes as the view does (it kept the overflow while it had a copy of the view's decoding)
+    conn.execute("SELECT tgsis.create_chunk_face('vrtx', 'vrtx_face'), tgsis.create_chunk_face('trgl', 'trgl_face')")
+    assert [r[0] for r in conn.execute("SELECT vrtxid FROM tgsis.vrtx_face ORDER BY 1").fetchall()] == ids
+    got = conn.execute("SELECT trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.trgl_face ORDER BY 1").fetchall()
+    assert got == [(0, top, 0, 1), (top, top - 2, top, top - 1)]
 
 
 def test_the_codec_takes_big_endian_doubles_bit_for_bit() -> None:

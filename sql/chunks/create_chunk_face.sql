@@ -33,12 +33,7 @@ DECLARE
     v_storage   regclass;
     v_today     regclass;
     v_versioned boolean;
-    v_shift     integer;
-    v_refs      text[];
-    v_first     text;
-    v_select    text[] := '{}';
-    v_arrays    text[] := '{}';
-    v_alias     text[] := '{}';
+    v_dec       record;
     v_where     text[] := '{}';
     v_c         record;
     v_acl       record;
@@ -58,28 +53,7 @@ BEGIN
     v_storage := tgsis.storage_table('tgsis', p_table)::regclass;
     v_today := to_regclass(format('tgsis.%I', p_table));
     v_versioned := EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table);
-    v_shift := round(log(2, v_reg.chunksize))::integer;
-    v_refs := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder);
-    FOR v_c IN SELECT c.name, c.role FROM tgsis.chunk_columns(p_table) c ORDER BY c.colorder LOOP
-        IF v_c.role = 'key' THEN
-            v_select := v_select || format('v.%I', v_c.name);
-        ELSIF v_c.role = 'chunk' THEN
-            v_select := v_select || format('(v.chunk << %s) + u.o - 1 AS %I', v_shift, v_c.name);
-        ELSIF v_c.role = 'float' THEN
-            v_arrays := v_arrays || format('v.%I', v_c.name);
-            v_alias := v_alias || quote_ident(v_c.name);
-            v_select := v_select || format('u.%I', v_c.name);
-            v_first := coalesce(v_first, format('u.%I IS NOT NULL', v_c.name));
-        ELSE
-            v_arrays := v_arrays || format('v.%I', v_c.name) || format('v.%I', v_c.name || '_wide');
-            v_alias := v_alias || quote_ident(v_c.name) || quote_ident(v_c.name || '_wide');
-            v_select := v_select || format('CASE WHEN v.vbase IS NOT NULL THEN v.vbase + %s ELSE u.%I END AS %I',
-                                           CASE WHEN v_c.name = v_refs[1] THEN format('u.%I', v_c.name)
-                                                ELSE format('u.%I + u.%I', v_refs[1], v_c.name) END,
-                                           v_c.name || '_wide', v_c.name);
-            v_first := coalesce(v_first, format('(u.%I IS NOT NULL OR u.%I IS NOT NULL)', v_c.name, v_c.name || '_wide'));
-        END IF;
-    END LOOP;
+    SELECT * INTO v_dec FROM tgsis.chunk_decode_sql(p_table, 'v') AS d;
     -- today's test (tgsis.versioned_view_source) while the storage is versioned, decided when the view is read:
     -- versioning can be enabled after the face is made (the hostile review found a face made on unversioned
     -- storage showing every chunk version, twice each vertex, once versioning was enabled)
@@ -88,14 +62,13 @@ BEGIN
                                  'THEN (v.revision = ANY ((SELECT tgsis.get_revisions(true))::integer[])) IS TRUE '
                                  'AND (NOT v.revclosed OR NOT (v.lastrevs && (SELECT tgsis.get_revisions(true)))) '
                                  'ELSE true END', p_table);
-    v_where := v_where || v_first;
+    v_where := v_where || v_dec.present;
     IF v_reg.geoidcolumn IS NOT NULL THEN
         v_where := v_where || tgsis.class_rights_filter(v_reg.geoidcolumn, 'SELECT', 'v');
     END IF;
     EXECUTE format('CREATE VIEW tgsis.%I WITH (security_barrier = true) AS SELECT %s FROM %s v '
                    'CROSS JOIN LATERAL unnest(%s) WITH ORDINALITY AS u(%s, o) WHERE %s',
-                   v_view, array_to_string(v_select, ', '), v_chunk, array_to_string(v_arrays, ', '),
-                   array_to_string(v_alias, ', '), array_to_string(v_where, ' AND '));
+                   v_view, v_dec.select_list, v_chunk, v_dec.arrays, v_dec.aliases, array_to_string(v_where, ' AND '));
     v_face := format('tgsis.%I', v_view)::regclass;
     EXECUTE format('COMMENT ON VIEW %s IS %L', v_face,
                    format('%s, stored in chunks (%s, docs/storage.md "The relational face"): the rows of the %s chunk versions, '

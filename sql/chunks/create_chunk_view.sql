@@ -19,12 +19,7 @@ DECLARE
     v_reg    tgsis.model_tables;
     v_chunk  regclass;
     v_view   text := p_table || '_chunk_rows';
-    v_shift  integer;
-    v_refs   text[];
-    v_first  text;
-    v_select text[] := '{}';
-    v_arrays text[] := '{}';
-    v_alias  text[] := '{}';
+    v_dec    record;
     v_c      record;
     v_acl    record;
 BEGIN
@@ -38,33 +33,10 @@ BEGIN
     IF to_regclass(format('tgsis.%I', v_view)) IS NOT NULL THEN
         RAISE EXCEPTION 'tgsis.% exists already', quote_ident(v_view) USING ERRCODE = 'TG201';
     END IF;
-    v_shift := round(log(2, v_reg.chunksize))::integer;
-    v_refs := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder);
-    FOR v_c IN SELECT c.name, c.role FROM tgsis.chunk_columns(p_table) c ORDER BY c.colorder LOOP
-        IF v_c.role = 'key' THEN
-            v_select := v_select || format('c.%I', v_c.name);
-        ELSIF v_c.role = 'chunk' THEN
-            v_select := v_select || format('(c.chunk << %s) + (u.o - 1) AS %I', v_shift, v_c.name);  -- (u.o - 1) first: id 2^63 - 1 is slot 1024
-        ELSIF v_c.role = 'float' THEN
-            v_arrays := v_arrays || format('c.%I', v_c.name);
-            v_alias := v_alias || quote_ident(v_c.name);
-            v_select := v_select || format('u.%I', v_c.name);
-            v_first := coalesce(v_first, format('u.%I IS NOT NULL', v_c.name));
-        ELSE
-            v_arrays := v_arrays || format('c.%I', v_c.name) || format('c.%I', v_c.name || '_wide');
-            v_alias := v_alias || quote_ident(v_c.name) || quote_ident(v_c.name || '_wide');
-            -- the first ref relative to vbase, the others to the first
-            v_select := v_select || format('CASE WHEN c.vbase IS NOT NULL THEN c.vbase + %s ELSE u.%I END AS %I',
-                                           CASE WHEN v_c.name = v_refs[1] THEN format('u.%I', v_c.name)
-                                                ELSE format('u.%I + u.%I', v_refs[1], v_c.name) END,
-                                           v_c.name || '_wide', v_c.name);
-            v_first := coalesce(v_first, format('(u.%I IS NOT NULL OR u.%I IS NOT NULL)', v_c.name, v_c.name || '_wide'));
-        END IF;
-    END LOOP;
+    SELECT * INTO v_dec FROM tgsis.chunk_decode_sql(p_table, 'c') AS d;
     EXECUTE format('CREATE VIEW tgsis.%I WITH (security_invoker = true) AS SELECT %s, c.revision, c.lastrevs, c.revclosed '
                    'FROM %s c CROSS JOIN LATERAL unnest(%s) WITH ORDINALITY AS u(%s, o) WHERE %s',
-                   v_view, array_to_string(v_select, ', '), v_chunk, array_to_string(v_arrays, ', '),
-                   array_to_string(v_alias, ', '), v_first);
+                   v_view, v_dec.select_list, v_chunk, v_dec.arrays, v_dec.aliases, v_dec.present);
     EXECUTE format('COMMENT ON VIEW tgsis.%I IS %L', v_view,
                    format('the chunks of %s decoded: one row per present slot and chunk version, with the columns of tgsis.%s '
                           'and the chunk version''s revision, lastrevs, revclosed (no visibility filter)', v_chunk, p_table));

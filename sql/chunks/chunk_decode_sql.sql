@@ -1,0 +1,59 @@
+-- tgsis.chunk_decode_sql(table, alias): the SQL pieces that decode the chunk versions of a chunk table into rows.
+-- The decoded view (tgsis.create_chunk_view) and the relational face
+-- (tgsis.create_chunk_face) read chunks the same way: the arrays unnested
+-- side by side WITH ORDINALITY (o), the local id = (chunk << shift) + (o - 1)
+-- (the slot first: id 2^63 - 1 is slot 1024 of the last chunk, and
+-- chunk << shift + o would overflow before the subtraction), vertex ids from
+-- vbase and the differences or from the _wide columns, and a slot present
+-- when its first column is not NULL (NULL marks a hole). One function builds
+-- the pieces, so that a fix of the decoding reaches every reader (a copy of
+-- this loop in the face kept the overflow the hostile review fixed in the
+-- view). p_alias is the chunk table's alias in the caller's FROM; the
+-- ordinality and the unnested columns are read as u.<name> and u.o.
+CREATE FUNCTION tgsis.chunk_decode_sql(p_table text, p_alias text)
+RETURNS TABLE (select_list text, arrays text, aliases text, present text)
+LANGUAGE plpgsql
+STABLE
+SET search_path = pg_catalog, pg_temp
+AS $$
+DECLARE
+    v_shift  integer;
+    v_refs   text[];
+    v_first  text;
+    v_select text[] := '{}';
+    v_arrays text[] := '{}';
+    v_alias  text[] := '{}';
+    v_a      text := quote_ident(p_alias);
+    v_c      record;
+BEGIN
+    v_shift := (SELECT round(log(2, t.chunksize))::integer FROM tgsis.model_tables t WHERE t.tablename = p_table);
+    v_refs := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder);
+    FOR v_c IN SELECT c.name, c.role FROM tgsis.chunk_columns(p_table) c ORDER BY c.colorder LOOP
+        IF v_c.role = 'key' THEN
+            v_select := v_select || format('%s.%I', v_a, v_c.name);
+        ELSIF v_c.role = 'chunk' THEN
+            v_select := v_select || format('(%s.chunk << %s) + (u.o - 1) AS %I', v_a, v_shift, v_c.name);
+        ELSIF v_c.role = 'float' THEN
+            v_arrays := v_arrays || format('%s.%I', v_a, v_c.name);
+            v_alias := v_alias || quote_ident(v_c.name);
+            v_select := v_select || format('u.%I', v_c.name);
+            v_first := coalesce(v_first, format('u.%I IS NOT NULL', v_c.name));
+        ELSE
+            v_arrays := v_arrays || format('%s.%I', v_a, v_c.name) || format('%s.%I', v_a, v_c.name || '_wide');
+            v_alias := v_alias || quote_ident(v_c.name) || quote_ident(v_c.name || '_wide');
+            -- the first ref relative to vbase, the others to the first
+            v_select := v_select || format('CASE WHEN %s.vbase IS NOT NULL THEN %s.vbase + %s ELSE u.%I END AS %I', v_a, v_a,
+                                           CASE WHEN v_c.name = v_refs[1] THEN format('u.%I', v_c.name)
+                                                ELSE format('u.%I + u.%I', v_refs[1], v_c.name) END,
+                                           v_c.name || '_wide', v_c.name);
+            v_first := coalesce(v_first, format('(u.%I IS NOT NULL OR u.%I IS NOT NULL)', v_c.name, v_c.name || '_wide'));
+        END IF;
+    END LOOP;
+    RETURN QUERY SELECT array_to_string(v_select, ', '), array_to_string(v_arrays, ', '), array_to_string(v_alias, ', '), v_first;
+END
+$$;
+
+REVOKE ALL ON FUNCTION tgsis.chunk_decode_sql(text, text) FROM PUBLIC;
+
+COMMENT ON FUNCTION tgsis.chunk_decode_sql(text, text) IS
+    'the SQL pieces decoding tgsis.<table>_chunk (alias p_alias) into the row table''s columns: the select list (ids from chunk and ordinality u.o, vertex ids from vbase or _wide), the arrays to unnest, their aliases, and the test of a present slot; read by tgsis.create_chunk_view and create_chunk_face';
