@@ -39,12 +39,8 @@ DECLARE
     v_len      text;    -- its length: the first value array's
 BEGIN
     SELECT * INTO v_reg FROM tgsis.model_tables t WHERE t.tablename = p_table;
-    PERFORM FROM tgsis.chunk_columns(p_table);  -- TG200 / TG100
-    v_view := to_regclass(format('tgsis.%I', p_table || '_chunk_rows'));
-    IF v_view IS NULL THEN
-        RAISE EXCEPTION 'tgsis.% has no decoded chunk view', quote_ident(p_table)
-            USING ERRCODE = 'TG200', HINT = 'create the chunk table and its view first';
-    END IF;
+    PERFORM tgsis.chunk_table_of(p_table, true);  -- TG200 / TG100
+    v_view := format('tgsis.%I', p_table || '_chunk_rows')::regclass;
     v_storage := tgsis.storage_table('tgsis', p_table)::regclass;
     v_shift := round(log(2, v_reg.chunksize))::integer;
     v_keys := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'key' ORDER BY c.keyorder);

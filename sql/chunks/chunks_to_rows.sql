@@ -27,13 +27,8 @@ DECLARE
     v_any       boolean;
     v_n         bigint;
 BEGIN
-    PERFORM FROM tgsis.chunk_columns(p_table);  -- TG200 / TG100
-    v_chunk := to_regclass(format('tgsis.%I', p_table || '_chunk'));
-    v_view := to_regclass(format('tgsis.%I', p_table || '_chunk_rows'));
-    IF v_chunk IS NULL OR v_view IS NULL THEN
-        RAISE EXCEPTION 'tgsis.% has no chunk table or no chunk view', quote_ident(p_table)
-            USING ERRCODE = 'TG200', HINT = 'create the chunk table and its view first';
-    END IF;
+    v_chunk := tgsis.chunk_table_of(p_table, true);  -- TG200 / TG100
+    v_view := format('tgsis.%I', p_table || '_chunk_rows')::regclass;
     v_storage := tgsis.storage_table('tgsis', p_table)::regclass;
     v_versioned := EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table);
     IF v_versioned THEN

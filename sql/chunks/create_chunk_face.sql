@@ -40,12 +40,7 @@ DECLARE
     v_face      regclass;
 BEGIN
     SELECT * INTO v_reg FROM tgsis.model_tables t WHERE t.tablename = p_table;
-    PERFORM FROM tgsis.chunk_columns(p_table);  -- TG200 / TG100
-    v_chunk := to_regclass(format('tgsis.%I', p_table || '_chunk'));
-    IF v_chunk IS NULL THEN
-        RAISE EXCEPTION 'tgsis.% has no chunk table', quote_ident(p_table)
-            USING ERRCODE = 'TG200', HINT = 'create the chunk table first';
-    END IF;
+    v_chunk := tgsis.chunk_table_of(p_table);  -- TG200 / TG100
     IF to_regclass(format('tgsis.%I', v_view)) IS NOT NULL THEN
         RAISE EXCEPTION 'tgsis.% exists already', quote_ident(v_view)
             USING ERRCODE = 'TG201', DETAIL = 'The face of a chunk table takes a name no relation has.';

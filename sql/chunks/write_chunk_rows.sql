@@ -76,12 +76,7 @@ DECLARE
 BEGIN
     PERFORM tgsis.require_read_committed('a write of chunks');
     SELECT * INTO v_reg FROM tgsis.model_tables t WHERE t.tablename = p_table;
-    PERFORM FROM tgsis.chunk_columns(p_table);  -- TG200 / TG100
-    v_chunk := to_regclass(format('tgsis.%I', p_table || '_chunk'));
-    IF v_chunk IS NULL THEN
-        RAISE EXCEPTION 'tgsis.% has no chunk table', quote_ident(p_table)
-            USING ERRCODE = 'TG200', HINT = 'create the chunk table first';
-    END IF;
+    v_chunk := tgsis.chunk_table_of(p_table);  -- TG200 / TG100
     v_storage := tgsis.storage_table('tgsis', p_table)::regclass;
     v_size := v_reg.chunksize;
     v_shift := round(log(2, v_reg.chunksize))::integer;
