@@ -68,6 +68,7 @@ from transfer import grid_surface
 import tgsis
 from tgsis.db import features as F
 from tgsis.db.local import LocalServer, find_binaries
+from tgsis.mesh import morton_codes
 from tgsis.postgis import mesh_to_ewkb
 
 ARRAY_OID = {"float8": 701, "int8": 20, "int4": 23}
@@ -100,28 +101,6 @@ class Ordered:
     cell_new_of_old: np.ndarray  # (m,) int64
 
 
-def morton3(points: np.ndarray) -> np.ndarray:
-    """Morton (Z-order) code of (n, 3) points quantized to 21 bits per axis over their box."""
-    lo = points.min(axis=0)
-    extent = float((points.max(axis=0) - lo).max()) or 1.0  # one scale for all axes: the curve stays isotropic
-    q = ((points - lo) / extent * (2**21 - 1)).astype(np.uint64)
-
-    def spread(v: np.ndarray) -> np.ndarray:
-        v = v & np.uint64(0x1FFFFF)
-        for shift, mask in (
-            (32, 0x1F00000000FFFF),
-            (16, 0x1F0000FF0000FF),
-            (8, 0x100F00F00F00F00F),
-            (4, 0x10C30C30C30C30C3),
-            (2, 0x1249249249249249),
-        ):
-            v = (v | (v << np.uint64(shift))) & np.uint64(mask)
-        return v
-
-    code: np.ndarray = spread(q[:, 0]) | (spread(q[:, 1]) << np.uint64(1)) | (spread(q[:, 2]) << np.uint64(2))
-    return code
-
-
 def reorder(vertices: np.ndarray, cells: np.ndarray, prop: np.ndarray, order: str) -> Ordered:
     """The surface with vertex and cell ids renumbered in ``order``."""
     n, m = len(vertices), len(cells)
@@ -131,7 +110,7 @@ def reorder(vertices: np.ndarray, cells: np.ndarray, prop: np.ndarray, order: st
     elif order == "shuffled":
         vperm = rng.permutation(n)
     else:
-        vperm = np.argsort(morton3(vertices), kind="stable")  # vperm[new] = old
+        vperm = np.argsort(morton_codes(vertices), kind="stable")  # vperm[new] = old
     new_of_old = np.empty(n, dtype=np.int64)
     new_of_old[vperm] = np.arange(n)
     renumbered = new_of_old[cells]

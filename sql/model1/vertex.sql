@@ -3,7 +3,8 @@
 -- by its key through an index (the key is computed from the chunk number and
 -- the slot): a query "WHERE geoid = g AND vrtxid = k" on it unnests the
 -- object. This function reads the one chunk k >> log2(chunksize) by the chunk
--- table's primary key and takes its slot: the psql user's keyed read. Until
+-- table's primary key and takes its slot (through tgsis.vertices, its set
+-- form): the psql user's keyed read. Until
 -- the storage switch creates tgsis.vrtx_chunk as model 1's storage, it reads
 -- today's rows (tgsis.vrtx) by their key. The session's visibility: the
 -- viewing set (tgsis.get_revisions(true)) when the storage is versioned,
@@ -12,30 +13,13 @@
 -- SELECT right sees no row), as on tgsis.vrtx. No row for an absent vertex.
 CREATE FUNCTION tgsis.vertex(p_geoid bigint, p_vrtxid bigint)
 RETURNS TABLE (x double precision, y double precision, z double precision)
-LANGUAGE plpgsql
+LANGUAGE sql
 STABLE
 PARALLEL SAFE
 SET search_path = pg_catalog, pg_temp
 AS $$
-DECLARE
-    v_size bigint;
-    v_set  integer[];
-BEGIN
-    IF to_regclass('tgsis.vrtx_chunk') IS NULL THEN
-        RETURN QUERY SELECT v.x, v.y, v.z FROM tgsis.vrtx v WHERE v.geoid = p_geoid AND v.vrtxid = p_vrtxid;
-        RETURN;
-    END IF;
-    SELECT t.chunksize INTO v_size FROM tgsis.model_tables t WHERE t.tablename = 'vrtx';
-    IF EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = 'vrtx') THEN
-        v_set := tgsis.get_revisions(true);
-    END IF;
-    RETURN QUERY
-    SELECT c.x[s.slot], c.y[s.slot], c.z[s.slot]
-      FROM tgsis.vrtx_chunk c, (SELECT ((p_vrtxid % v_size) + 1)::integer AS slot) s
-     WHERE c.geoid = p_geoid AND c.chunk = p_vrtxid / v_size AND p_vrtxid >= 0
-       AND (v_set IS NULL OR ((c.revision = ANY (v_set)) IS TRUE AND (NOT c.revclosed OR NOT (c.lastrevs && v_set))))
-       AND c.x[s.slot] IS NOT NULL;
-END
+    -- the one-id case of tgsis.vertices: one implementation of the keyed read (which storage, visibility, slot)
+    SELECT v.x, v.y, v.z FROM tgsis.vertices(p_geoid, ARRAY[p_vrtxid]) AS v
 $$;
 
 COMMENT ON FUNCTION tgsis.vertex(bigint, bigint) IS
