@@ -157,6 +157,7 @@ _NAMED_IN_DOCS = frozenset(
         "storage_rows_check",
         "storage_run",
         "storage_table",
+        "stored_in_chunks",
         "storage_write_check",
         "surface_side_gap",
         "surfaces_at",

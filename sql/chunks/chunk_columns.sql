@@ -4,9 +4,9 @@
 -- derive their column lists from here, so that they agree column for column
 -- (the contract: docs/storage.md, "Chunks and the mapping of ids"). Read from
 -- the registry (tgsis.model_tables: chunkcolumn, chunkrefs, chunksize) and from
--- the live storage of the row table (pg_attribute of what tgsis.storage_table
+-- the live definition of the row table (pg_attribute of what tgsis.row_shape
 -- names: the table, or <table>_ver once versioned, whose versioning columns are
--- left out), never from a list typed here. Roles: 'key' (a primary-key column
+-- left out, or the shape table once stored in chunks), never from a list typed here. Roles: 'key' (a primary-key column
 -- other than the chunk column: geoid, and the time keys of later models),
 -- 'chunk' (the local-id column, replaced by chunk = id >> log2(chunksize)),
 -- 'float' (a double precision column: a double precision[] of the same name),
@@ -32,7 +32,7 @@ BEGIN
                                 ELSE 'No row of tgsis.model_tables names it.' END,
                   HINT = 'only the vertex and simplex tables registered with a chunk column have chunk tables';
     END IF;
-    v_storage := to_regclass(tgsis.storage_table('tgsis', p_table));
+    v_storage := tgsis.row_shape(p_table);  -- the row storage, or its shape once stored in chunks
     IF v_storage IS NULL THEN
         RAISE EXCEPTION 'the storage of tgsis.% does not exist', quote_ident(p_table)
             USING ERRCODE = 'TG200', HINT = 'create the storage of the data models first';

@@ -45,7 +45,7 @@ BEGIN
         RAISE EXCEPTION 'tgsis.% exists already', quote_ident(v_view)
             USING ERRCODE = 'TG201', DETAIL = 'The face of a chunk table takes a name no relation has.';
     END IF;
-    v_storage := tgsis.storage_table('tgsis', p_table)::regclass;
+    v_storage := tgsis.row_shape(p_table);  -- the row definition (comments), before or after the switch
     v_today := to_regclass(format('tgsis.%I', p_table));
     v_versioned := EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table);
     SELECT * INTO v_dec FROM tgsis.chunk_decode_sql(p_table, 'v') AS d;
@@ -79,7 +79,7 @@ BEGIN
     END LOOP;
     -- the grants of today's relation (what the face replaces), else the storage's
     FOR v_acl IN SELECT a.privilege_type, a.grantee FROM pg_class c, aclexplode(c.relacl) AS a
-                  WHERE c.oid = coalesce(v_today, v_storage) AND a.grantee <> c.relowner
+                  WHERE c.oid = coalesce(v_today, v_chunk) AND a.grantee <> c.relowner
                     AND a.privilege_type IN ('SELECT', 'INSERT', 'UPDATE', 'DELETE') LOOP
         EXECUTE format('GRANT %s ON %s TO %s', v_acl.privilege_type, v_face,
                        CASE WHEN v_acl.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_acl.grantee)) END);

@@ -38,9 +38,9 @@ BEGIN
     FOR v_c IN SELECT a.attname, a.attnum FROM pg_attribute a
                 WHERE a.attrelid = format('tgsis.%I', v_view)::regclass AND a.attnum > 0 ORDER BY a.attnum LOOP
         EXECUTE format('COMMENT ON COLUMN tgsis.%I.%I IS %L', v_view, v_c.attname,
-                       coalesce(col_description(tgsis.storage_table('tgsis', p_table)::regclass,
+                       coalesce(col_description(tgsis.row_shape(p_table),
                                                 (SELECT a.attnum FROM pg_attribute a
-                                                  WHERE a.attrelid = tgsis.storage_table('tgsis', p_table)::regclass
+                                                  WHERE a.attrelid = tgsis.row_shape(p_table)
                                                     AND a.attname = v_c.attname)::integer),
                                 format('%s of the chunk version', v_c.attname)));
     END LOOP;

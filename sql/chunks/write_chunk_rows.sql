@@ -77,7 +77,7 @@ BEGIN
     PERFORM tgsis.require_read_committed('a write of chunks');
     SELECT * INTO v_reg FROM tgsis.model_tables t WHERE t.tablename = p_table;
     v_chunk := tgsis.chunk_table_of(p_table);  -- TG200 / TG100
-    v_storage := tgsis.storage_table('tgsis', p_table)::regclass;
+    v_storage := tgsis.row_shape(p_table);  -- the row definition (CHECK constraints), before or after the switch
     v_size := v_reg.chunksize;
     v_shift := round(log(2, v_reg.chunksize))::integer;
     v_cc := v_reg.chunkcolumn;
@@ -142,7 +142,8 @@ BEGIN
                   HINT = 'give each key once, with all its values';
     END IF;
     FOR v_con IN SELECT con.conname, pg_get_expr(con.conbin, con.conrelid) AS expr
-                   FROM pg_constraint con WHERE con.conrelid = v_storage AND con.contype = 'c' ORDER BY con.conname LOOP
+                   FROM pg_constraint con WHERE con.conrelid = v_storage AND con.contype = 'c'
+                    AND con.conname <> p_table || '_shape_holds_no_rows' ORDER BY con.conname LOOP
         EXECUTE format('SELECT EXISTS (SELECT FROM %s WHERE NOT _delete AND NOT (%s))', p_rows, v_con.expr) INTO v_more;
         IF v_more THEN
             RAISE EXCEPTION 'new row for relation "%" violates check constraint "%"', p_table, v_con.conname

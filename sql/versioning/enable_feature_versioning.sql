@@ -50,7 +50,24 @@ BEGIN
     -- the storage of every data model (tgsis.model_tables), referenced rows first
     FOR v_table, v_order, v_objectclass, v_key IN
         SELECT tablename, iudorder, objectclass, keycolumn FROM tgsis.model_tables ORDER BY model, iudorder, tablename LOOP
-        IF NOT EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = 'tgsis' AND tablename = v_table) THEN
+        IF EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = 'tgsis' AND tablename = v_table) THEN
+            CONTINUE;
+        ELSIF tgsis.stored_in_chunks(v_table) THEN
+            -- stored in chunks (tgsis.store_in_chunks): the chunk versions carry revision and lastrevs
+            -- already (all of revision 0) and the face decides visibility at each read, so versioning is
+            -- the registration and the write right's statement check of a versioned view
+            INSERT INTO tgsis.versioned_tables (schemaname, tablename, shortname, objectkeyfield, objectclass, iudorder,
+                                                keycolumns, pkeyname, tablecomment, enabled_by)
+            SELECT 'tgsis', v_table, v_table, v_key, v_objectclass, v_order,
+                   array_agg(a.attname::text ORDER BY k.ord), v_table || '_pkey',
+                   obj_description(format('tgsis.%I', v_table)::regclass, 'pg_class'), tgsis.calling_role()
+              FROM pg_constraint con
+             CROSS JOIN LATERAL unnest(con.conkey) WITH ORDINALITY AS k(attnum, ord)
+              JOIN pg_attribute a ON a.attrelid = con.conrelid AND a.attnum = k.attnum
+             WHERE con.conrelid = format('tgsis.%I', v_table || '_shape')::regclass AND con.contype = 'p';
+            EXECUTE format('CREATE TRIGGER tgsis_versioning_rights BEFORE INSERT OR UPDATE OR DELETE ON tgsis.%I '
+                           'FOR EACH STATEMENT EXECUTE FUNCTION tgsis.view_write_check()', v_table);
+        ELSE
             PERFORM tgsis.enable_versioning_rel(format('tgsis.%I', v_table)::regclass, v_key, v_objectclass, v_order);
         END IF;
     END LOOP;

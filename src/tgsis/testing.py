@@ -286,6 +286,14 @@ def template_db(pg: TestServer) -> Iterator[str]:
     with pg.database("tgsis_tpl") as (name, dsn):
         with psycopg.connect(dsn) as conn:
             result = install(conn, method="extension" if pg.extension_files is None else "sql")
+            if os.environ.get("TGSIS_TEST_STORAGE") == "chunks":
+                # the storage switch of issue 40 (sql/chunks/store_in_chunks.sql), not yet the default: every
+                # table registered for chunks is stored in chunks in every database cloned from the template
+                with conn.transaction():
+                    conn.execute(
+                        "SELECT tgsis.store_in_chunks(tablename) FROM tgsis.model_tables"
+                        " WHERE chunkcolumn IS NOT NULL ORDER BY model, iudorder, tablename"
+                    )
         _SESSION["template_method"] = result.method
         yield name
 

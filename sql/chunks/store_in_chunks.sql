@@ -1,0 +1,104 @@
+-- tgsis.store_in_chunks(table): the storage switch of one model table, from rows to chunks behind a face with today's name.
+-- docs/storage.md, "The relational face: views with today's names" and
+-- "Upgrading an existing database": in one transaction,
+-- 1. tgsis.<table>_chunk and its decoded view are created and filled from the
+--    row storage (tgsis.rows_to_chunks, which verifies every version's and
+--    every revision's set before returning: TG000 and nothing changed on a
+--    difference);
+-- 2. the row table's definition (columns, NOT NULLs, CHECKs, primary key and
+--    comments; not the versioning columns) is kept, without rows, as
+--    tgsis.<table>_shape: the marker tgsis.stored_in_chunks reads and the
+--    definition tgsis.row_shape gives the layer's functions (a CHECK that is
+--    always false keeps it empty);
+-- 3. the face tgsis.<table> is made (tgsis.create_chunk_face) with the grants
+--    of the relation it replaces, and the row storage is dropped: the table,
+--    or the versioned view, its <table>_ver, write queue, write function and
+--    runner. A versioned table stays registered (tgsis.versioned_tables): the
+--    chunk table is its storage (tgsis.storage_table), the face decides
+--    visibility at each read.
+-- Views of the users' own over the table block the drop (PostgreSQL names
+-- them, nothing changes). Refused by name: a table not registered for chunks
+-- (TG200), one stored in chunks already (TG201). Returns the chunk versions
+-- written. Internal (tgsis's owner: it creates and drops the storage).
+CREATE FUNCTION tgsis.store_in_chunks(p_table text)
+RETURNS bigint
+LANGUAGE plpgsql
+VOLATILE
+SET search_path = pg_catalog, pg_temp
+AS $$
+DECLARE
+    v_storage   regclass;
+    v_shape     text := p_table || '_shape';
+    v_versioned tgsis.versioned_tables;
+    v_keys      text[];
+    v_pkey      text;
+    v_n         bigint;
+    v_name      text;
+BEGIN
+    PERFORM FROM tgsis.chunk_columns(p_table);  -- TG200 not registered for chunks, TG100 does not fit
+    IF tgsis.stored_in_chunks(p_table) THEN
+        RAISE EXCEPTION 'tgsis.% is stored in chunks already', quote_ident(p_table)
+            USING ERRCODE = 'TG201', DETAIL = format('Its chunk table is tgsis.%I.', p_table || '_chunk');
+    END IF;
+    IF to_regclass(format('tgsis.%I', v_shape)) IS NOT NULL OR to_regclass(format('tgsis.%I', p_table || '_face')) IS NOT NULL THEN
+        RAISE EXCEPTION 'tgsis.% or tgsis.% exists already', quote_ident(v_shape), quote_ident(p_table || '_face')
+            USING ERRCODE = 'TG201', DETAIL = 'The storage switch needs these names for the row definition and the new face.';
+    END IF;
+    v_storage := tgsis.storage_table('tgsis', p_table)::regclass;
+    SELECT * INTO v_versioned FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table;
+
+    -- 1. the chunks, verified against every set
+    PERFORM tgsis.create_chunk_table(p_table);
+    PERFORM tgsis.create_chunk_view(p_table);
+    v_n := tgsis.rows_to_chunks(p_table);
+
+    -- 2. the row definition, without rows
+    IF v_versioned.tablename IS NOT NULL THEN
+        v_keys := v_versioned.keycolumns;
+        v_pkey := v_versioned.pkeyname;
+    ELSE
+        SELECT con.conname, array_agg(a.attname::text ORDER BY k.ord) INTO v_pkey, v_keys
+          FROM pg_constraint con
+         CROSS JOIN LATERAL unnest(con.conkey) WITH ORDINALITY AS k(attnum, ord)
+          JOIN pg_attribute a ON a.attrelid = con.conrelid AND a.attnum = k.attnum
+         WHERE con.conrelid = v_storage AND con.contype = 'p'
+         GROUP BY con.conname;
+    END IF;
+    EXECUTE format('CREATE TABLE tgsis.%I (LIKE %s INCLUDING CONSTRAINTS INCLUDING COMMENTS)', v_shape, v_storage);
+    IF v_versioned.tablename IS NOT NULL THEN
+        EXECUTE format('ALTER TABLE tgsis.%I DROP COLUMN revision, DROP COLUMN lastrevs, DROP COLUMN revclosed', v_shape);
+    END IF;
+    EXECUTE format('ALTER TABLE tgsis.%I ADD CONSTRAINT %I PRIMARY KEY (%s)', v_shape, v_shape || '_pkey',
+                   (SELECT string_agg(quote_ident(k), ', ' ORDER BY o) FROM unnest(v_keys) WITH ORDINALITY AS u(k, o)));
+    EXECUTE format('ALTER TABLE tgsis.%I ADD CONSTRAINT %I CHECK (false)', v_shape, p_table || '_shape_holds_no_rows');
+    EXECUTE format('REVOKE ALL ON tgsis.%I FROM PUBLIC', v_shape);
+    -- the row table's own comment first: the face's comment starts with it (tgsis.create_chunk_face)
+    EXECUTE format('COMMENT ON TABLE tgsis.%I IS %L', v_shape,
+                   coalesce(v_versioned.tablecomment, obj_description(v_storage, 'pg_class')));
+
+    -- 3. the face takes the name; the row storage goes
+    PERFORM tgsis.create_chunk_face(p_table, p_table || '_face');  -- the grants of today's tgsis.<table>
+    EXECUTE format('COMMENT ON TABLE tgsis.%I IS %L', v_shape,
+                   format('the row definition of tgsis.%I (columns, key %s, constraints, comments), kept without rows since it is '
+                          'stored in chunks (tgsis.%I behind the face tgsis.%I: tgsis.store_in_chunks)',
+                          p_table, coalesce(v_pkey, 'none'), p_table || '_chunk', p_table));
+
+    IF v_versioned.tablename IS NOT NULL THEN
+        EXECUTE format('DROP VIEW tgsis.%I', p_table);
+        EXECUTE format('DROP FUNCTION tgsis.%I()', p_table || '_ver_write');
+        EXECUTE format('DROP TABLE tgsis.%I', p_table || '_ver_queue');
+        FOR v_name IN SELECT p.oid::regprocedure::text FROM pg_proc p
+                       WHERE p.pronamespace = 'tgsis'::regnamespace AND p.proname = p_table || '_ver_run' LOOP
+            EXECUTE format('DROP FUNCTION %s', v_name);
+        END LOOP;
+    END IF;
+    EXECUTE format('DROP TABLE %s', v_storage);
+    EXECUTE format('ALTER VIEW tgsis.%I RENAME TO %I', p_table || '_face', p_table);
+    RETURN v_n;
+END
+$$;
+
+REVOKE ALL ON FUNCTION tgsis.store_in_chunks(text) FROM PUBLIC;
+
+COMMENT ON FUNCTION tgsis.store_in_chunks(text) IS
+    'switch a model table registered for chunks from rows to chunks in one transaction: tgsis.<table>_chunk filled and verified (tgsis.rows_to_chunks), the row definition kept without rows as tgsis.<table>_shape, the row storage dropped and tgsis.<table> made the face over the chunks (tgsis.create_chunk_face, the grants of the relation it replaces); returns the chunk versions written; TG201 when stored in chunks already';
