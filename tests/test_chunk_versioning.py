@@ -319,3 +319,24 @@ def test_objects_deleted_in_a_version_close_their_chunk_versions(conn: Conn, fau
     ).fetchall()
     assert changed == [("trgl", str(fault_clone)), ("vrtx", str(fault_clone))]
     conn.rollback()
+
+
+def test_a_reader_diffs_and_reads_versions_of_chunked_tables_with_its_own_rights(
+    db_dsn: str, conn: Conn, fault_clone: int
+) -> None:
+    # (the decoded chunks are read as the caller: tgsis.storage_rows and storage_key are the tgsis roles' to run)
+    switch_all(conn)
+    move(conn, "e1", fault_clone, [3, 4], (0.5, 0.5, 0.5))
+    conn.commit()
+    diff = (
+        "SELECT objectkey, shortname, added, removed, changed FROM tgsis.diff_versions('DEFAULT', 'e1') ORDER BY 1, 2"
+    )
+    rows = "SELECT count(*), sum(x) FROM tgsis.rows_at(NULL::tgsis.vrtx, 'e1')"
+    expected = (conn.execute(diff).fetchall(), conn.execute(rows).fetchone())
+    assert (str(fault_clone), "vrtx", 0, 0, 2) in expected[0]
+    conn.rollback()
+    with login_roles(db_dsn, {"reader": "tgsis_reader"}) as roles:
+        reader = roles.connect("reader")
+        assert (reader.execute(diff).fetchall(), reader.execute(rows).fetchone()) == expected
+        assert reader.execute("SELECT count(*) FROM tgsis.changed_objects(ARRAY[1, 2, 3])").fetchone() != (0,)
+        reader.close()
