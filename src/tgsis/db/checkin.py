@@ -435,8 +435,18 @@ def _meaning_columns(edited: Mesh, vertex_ids: IntArray) -> list[tuple[str, str,
     if meaning.color is not None:
         columns += [(c, "%s::real", v) for c, v in zip(("colorred", "colorgreen", "colorblue"), meaning.color)]
     if meaning.metadata is not None:
-        columns.append(("metadata", "%s::jsonb", meaning.metadata_json()))
+        # the order of the stored ids (metadata["vertex_order"], set by an upload in the spatial order) is the
+        # database's, not the file's: a file written by difference keeps the stored ids, so it keeps the label
+        holder = "%s::jsonb" if "vertex_order" in meaning.metadata else _KEEP_VERTEX_ORDER
+        columns.append(("metadata", holder, meaning.metadata_json()))
     return columns
+
+
+#: the edited metadata, with the stored row's "vertex_order" (read where the column ``metadata`` is tgsis.geometry's)
+_KEEP_VERTEX_ORDER = (
+    "(%s::jsonb || CASE WHEN metadata ? 'vertex_order' "
+    "THEN jsonb_build_object('vertex_order', metadata -> 'vertex_order') ELSE '{}'::jsonb END)"
+)
 
 
 _MEANING_WORDS = {
