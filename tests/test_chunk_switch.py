@@ -178,6 +178,18 @@ def test_refusals_change_nothing(conn: Conn, fault_clone: int) -> None:
     assert state == "TG201" and "stored in chunks already" in message
 
 
+def test_partitioned_storage_is_not_switched(conn: Conn) -> None:
+    """A chunk table is plain: switching storage the DBA partitioned would undo the partitioning without a word."""
+    tgsis.partition_model_storage(conn, 1, 4)
+    conn.commit()
+    state, message = _sqlstate(conn, "SELECT tgsis.store_in_chunks('trgl')")
+    assert state == "TG100" and "partitioned" in message
+    assert conn.execute(
+        "SELECT tgsis.stored_in_chunks('trgl'), to_regclass('tgsis.trgl_chunk'), "
+        "(SELECT relkind FROM pg_class WHERE oid = 'tgsis.trgl'::regclass)"
+    ).fetchone() == (False, None, "p")
+
+
 def test_roles_of_tgsis_may_not_switch(db_dsn: str, conn: Conn, fault_clone: int) -> None:
     with login_roles(db_dsn, {"reader": "tgsis_reader", "editor": "tgsis_editor", "admin": "tgsis_admin"}) as roles:
         for short in ("reader", "editor", "admin"):
