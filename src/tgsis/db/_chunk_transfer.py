@@ -47,6 +47,7 @@ __all__ = [
     "ChunkTable",
     "ObjectRows",
     "chunk_table",
+    "chunked_tables",
     "upload_chunks",
     "download_chunks",
     "download_tables",
@@ -110,6 +111,20 @@ class ObjectRows:
         if len({v.dtype for v in values}) > 1:
             raise InvalidInputError(f"columns {list(self.columns)} differ in type: take them one by one")
         return np.stack(values, axis=1) if values else np.empty((len(self.ids), 0))
+
+
+def chunked_tables(conn: Conn) -> frozenset[str]:
+    """The model tables whose rows are stored in chunks (``tgsis.stored_in_chunks``): their bulk paths take chunks.
+
+    Returns
+    -------
+    frozenset of str
+        Row table names (``vrtx``, ``trgl``, ...) of ``tgsis.model_tables`` stored in chunks; empty while rows are.
+    """
+    rows = conn.execute(
+        "SELECT tablename::text FROM tgsis.model_tables WHERE chunkcolumn IS NOT NULL AND tgsis.stored_in_chunks(tablename)"
+    ).fetchall()
+    return frozenset(str(r[0]) for r in rows)
 
 
 def chunk_table(conn: Conn, table: str) -> ChunkTable:

@@ -17,6 +17,7 @@ import psycopg
 from psycopg import sql
 
 from tgsis.arguments import no_nul
+from tgsis.db._chunk_transfer import ObjectRows, chunked_tables, upload_chunks
 from tgsis.db._transfer import (
     Packed,
     Storage,
@@ -165,22 +166,43 @@ def copy_meshes(
         xyz = xyz.copy()
         flip = np.repeat([meaning.depth for meaning in meanings], [m.n_vertices for m in meshes])
         xyz[flip, 2] = -xyz[flip, 2]  # exact: only the sign bit changes
-    storage.copy(
-        conn,
-        "tgsis",
-        "vrtx",
-        [
-            ("geoid", vertex_geoids, "int8"),
-            ("vrtxid", vertex_ids, "int8"),
-            ("x", xyz[:, 0], "float8"),
-            ("y", xyz[:, 1], "float8"),
-            ("z", xyz[:, 2], "float8"),
-        ],
-    )
+    chunked = chunked_tables(conn)
+    if "vrtx" in chunked:  # the chunks of every mesh in one COPY (docs/storage.md, "What each bulk path does")
+        starts = np.cumsum([0, *(m.n_vertices for m in meshes)])
+        upload_chunks(
+            conn,
+            "vrtx",
+            [
+                ObjectRows(
+                    geoid,
+                    np.arange(m.n_vertices, dtype=np.int64),
+                    {name: xyz[starts[i] : starts[i + 1], j] for j, name in enumerate(("x", "y", "z"))},
+                )
+                for i, (geoid, m) in enumerate(zip(geoids, meshes))
+            ],
+            storage,
+        )
+    else:
+        storage.copy(
+            conn,
+            "tgsis",
+            "vrtx",
+            [
+                ("geoid", vertex_geoids, "int8"),
+                ("vrtxid", vertex_ids, "int8"),
+                ("x", xyz[:, 0], "float8"),
+                ("y", xyz[:, 1], "float8"),
+                ("z", xyz[:, 2], "float8"),
+            ],
+        )
     for geotype in dict.fromkeys(m.geotype for m in meshes):  # each simplex table once, in member order
         group = [i for i, m in enumerate(meshes) if m.geotype == geotype]
         table, key = SIMPLEX[geotype]
         k = meshes[group[0]].cell_size
+        rows = [simplex_rows(geoids[i], meshes[i], table) for i in group]  # checked on both paths
+        if table in chunked:
+            upload_chunks(conn, table, rows, storage)
+            continue
         cell_geoids, cell_ids = row_keys([geoids[i] for i in group], [meshes[i].n_cells for i in group])
         cells = concat([meshes[i].cells for i in group])
         storage.copy(
@@ -221,6 +243,33 @@ def copy_meshes(
                 ],
             )
     copy_extras(conn, fc, geoids, meshes, meanings, storage)
+
+
+def simplex_rows(geoid: int, mesh: Mesh, table: str) -> ObjectRows:
+    """A mesh's simplices as the rows of its chunked simplex table: ids 0..m-1, one corner column per vertex.
+
+    Checks what the row table's CHECK checks on every row (``<table>_distinct_vertices``: a cell names k
+    distinct vertices), which a mesh changed after it was made may break: the chunk upload has no such
+    CHECK, and the row upload's would fail with a raw ``23514``.
+
+    Raises
+    ------
+    InvalidGeometryError
+        A cell names one vertex twice (nothing is written).
+    """
+    cells = np.asarray(mesh.cells, dtype=np.int64)
+    k = mesh.cell_size
+    repeated = np.zeros(len(cells), dtype=bool)
+    for i in range(k):
+        for j in range(i + 1, k):
+            repeated |= cells[:, i] == cells[:, j]
+    if repeated.any():
+        row = int(np.flatnonzero(repeated)[0])
+        raise InvalidGeometryError(
+            f"geometry {geoid}: {mesh.cell_name} {row} uses a vertex twice: {cells[row].tolist()}",
+            detail=f"{int(repeated.sum())} cells repeat a vertex (tgsis.{table}: {table}_distinct_vertices)",
+        )
+    return ObjectRows(geoid, np.arange(len(cells), dtype=np.int64), {f"vrtxid{j + 1}": cells[:, j] for j in range(k)})
 
 
 def extra_rows(
