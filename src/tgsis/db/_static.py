@@ -17,9 +17,10 @@ import psycopg
 from psycopg import sql
 
 from tgsis.arguments import no_nul
-from tgsis.db._chunk_transfer import ObjectRows, chunked_tables, upload_chunks
+from tgsis.db._chunk_transfer import ObjectRows, chunked_tables, rows_request, upload_chunks
 from tgsis.db._transfer import (
     Packed,
+    PartRequest,
     Storage,
     columns_out_all,
     concat,
@@ -451,15 +452,15 @@ def download(conn: Conn, fc: FeatureClass, parts: Mapping[int, Part]) -> Downloa
     One query (:func:`columns_out_all`): the vertices, the simplices of each
     geotype and each property table are its parts, each giving a geometry's
     column as one binary value, which the server may compute side by side;
-    a bounded number of parts whatever the number of geometries.
+    a bounded number of parts whatever the number of geometries. A table
+    stored in chunks gives its chunk rows (:func:`rows_request`), decoded
+    here: one statement, so one snapshot in any isolation level.
     """
     id_list = sql.Literal(list(parts))
-    requests = [
-        Packed(
-            sql.SQL("tgsis.vrtx"),
-            "geoid",
-            [("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")],
-            list(parts),
+    chunked = chunked_tables(conn)
+    requests: list[PartRequest] = [
+        rows_request(
+            conn, "vrtx", [("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")], list(parts), chunked
         )
     ]
     geotypes = list(dict.fromkeys(part.geotype for part in parts.values()))
@@ -467,14 +468,7 @@ def download(conn: Conn, fc: FeatureClass, parts: Mapping[int, Part]) -> Downloa
         table, key = SIMPLEX[geotype]
         cell_cols = [f"vrtxid{i + 1}" for i in range(mesh_class(geotype).cell_size)]
         group = [g for g, part in parts.items() if part.geotype == geotype]
-        requests.append(
-            Packed(
-                sql.SQL("tgsis.{}").format(sql.Identifier(table)),
-                "geoid",
-                [(c, "int8") for c in (key, *cell_cols)],
-                group,
-            )
-        )
+        requests.append(rows_request(conn, table, [(c, "int8") for c in (key, *cell_cols)], group, chunked))
     property_keys: list[tuple[str, tuple[str, ...]]] = []
     for alignment in ("VERTEX", "CELL"):  # one part per property table (and set of properties)
         props, protable = fc.aligned(alignment), fc.property_table(alignment)
