@@ -478,6 +478,11 @@ class PackedChunks:
                 f"tgsis.{self.layout.table}_chunk has no arrays {unknown} (it has {list(self.layout.columns.names)})"
             )
 
+    @property
+    def source(self) -> sql.Composed:
+        """The relation read: ``tgsis.<table>_chunk`` (as :attr:`Packed.source <tgsis.db._transfer.Packed>`)."""
+        return self.layout.relation
+
     def query(self, part: int) -> sql.Composed:
         """The rows ``(part, geoid, chunk rows, their record_send values joined)``: one per object with chunks."""
         record = sql.SQL("record_send(ROW({}))").format(
