@@ -71,6 +71,9 @@ def _load(conn: Conn) -> dict[str, int]:
         conn.execute("DELETE FROM tgsis.trgl WHERE geoid = %s AND trglid IN (7, 3000)", (grid,))
         conn.execute("INSERT INTO tgsis.vrtx VALUES (%s, 5000, 2.5, 2.5, 7)", (grid,))  # a chunk of its own
         conn.execute("INSERT INTO tgsis.trgl VALUES (%s, 9000, 5000, 100, 101)", (grid,))
+        # a vertex id past 2^31: its triangle's chunk keeps absolute ids (the _wide columns), with holes before it
+        conn.execute("INSERT INTO tgsis.vrtx VALUES (%s, 3000000000, 1, 1, 1)", (grid,))
+        conn.execute("INSERT INTO tgsis.trgl VALUES (%s, 9001, 3000000000, 100, 101)", (grid,))
         conn.commit()
         g["first"] = tgsis.save_revision(conn, "first")
         conn.execute("UPDATE tgsis.vrtx SET x = x + 0.5 WHERE geoid = %s AND vrtxid = 77", (grid,))
@@ -142,6 +145,9 @@ def test_the_readers_answer_on_chunks_what_they_answered_on_rows(conn: Conn, db_
     assert before["edit extent grid"] != before["DEFAULT extent grid"]
     assert [r[0] for r in before["edit vertices"]] == [5000, 0, 1500, 15, 77, 2115]
     _switch(conn)
+    assert conn.execute(
+        "SELECT count(*) FROM tgsis.trgl_chunk WHERE geoid = %s AND vbase IS NULL AND holes IS NOT NULL", (g["grid"],)
+    ).fetchone() == (1,)
     after = _answers(conn, g)
     assert [k for k in before if before[k] != after[k]] == []
     # a reader reads the chunks too (their grants and row-level security are the row storage's)
@@ -229,6 +235,7 @@ def test_a_check_in_from_a_stale_check_out_is_refused_on_chunks(conn: Conn, vers
         tgsis.enable_feature_versioning(conn)
     _switch(conn)
     taken = _fingerprint(conn, geoid)
+    assert conn.execute("SELECT nvrtx, ncell FROM tgsis.static_extent(%s)", (geoid,)).fetchone() == (1600, 2 * 39 * 39)
     conn.execute("SELECT tgsis.check_unchanged(%s, %s)", (geoid, taken))
     conn.rollback()
     conn.execute("UPDATE tgsis.vrtx SET z = z + 1 WHERE geoid = %s AND vrtxid = 1599", (geoid,))
