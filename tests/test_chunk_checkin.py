@@ -180,7 +180,7 @@ def test_a_check_in_merged_with_a_change_since_check_out_on_chunks(conn: Conn, l
     conn.commit()
     ann = checked_out.mesh.copy()
     ann.vertices[3, 2] += 7.0
-    result = tgsis.checkin(conn, checked_out, ann)
+    result = tgsis.checkin(conn, checked_out, ann, on_conflict="merge")
     conn.commit()
     assert result.merged
     now = _fetch(conn, loaded)
