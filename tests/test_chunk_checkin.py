@@ -22,7 +22,7 @@ from psycopg import sql
 import tgsis
 from tests.roles import login_roles
 from tests.test_merge_states_read import assert_identical, edit, reference_states
-from tgsis.db import _merge_states
+from tgsis.db import _chunk_write, _merge_states
 from tgsis.db import features as F
 
 Conn = psycopg.Connection[Any]
@@ -251,6 +251,15 @@ def test_the_sql_writer_refuses_by_name(conn: Conn, loaded: int, db_dsn: str) ->
     now = _fetch(conn, loaded)
     assert now.vertices[1].tolist() == [1.0, 2.0, -3.0]
     assert np.delete(now.vertices, 1, axis=0).tobytes() == np.delete(base.vertices, 1, axis=0).tobytes()
+    # the client's call sends the doubles bit for bit: a NaN's payload, a subnormal, -0.0
+    bits = np.array([0x7FF8_0000_DEAD_BEEF, 1, 0x8000_0000_0000_0000], dtype=np.uint64).view(np.float64)
+    assert _chunk_write.write_object_rows(conn, "vrtx", loaded, [], [2], floats=bits.reshape(1, 3)) == 1
+    sent = conn.execute(
+        "SELECT float8send(x) || float8send(y) || float8send(z) FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = 2",
+        (loaded,),
+    ).fetchone()
+    conn.rollback()
+    assert sent is not None and bytes(sent[0]) == bits.astype(">f8").tobytes()
 
 
 def test_a_save_is_refused_in_an_older_revision(conn: Conn, loaded: int) -> None:

@@ -102,8 +102,9 @@ def write_object_rows(
     written = np.asarray(ids, dtype=np.int64).reshape(-1)
     if not len(gone) and not len(written):
         return 0
+    # the doubles in binary (%b): bit for bit, NaN payloads too, as the row path's binary COPY sends them
     row = conn.execute(
-        "SELECT tgsis.write_object_rows(%s, %s, %s::bigint[], %s::bigint[], %s::float8[], %s::bigint[])",
+        "SELECT tgsis.write_object_rows(%s, %s, %s::bigint[], %s::bigint[], %b::float8[], %s::bigint[])",
         (
             table,
             int(geoid),
