@@ -44,13 +44,14 @@ from psycopg import sql
 from tgsis._vertex_metadata import renumbered
 from tgsis.arguments import checked
 from tgsis.compare import MeshDiff, MeshIndex, compare_meshes
+from tgsis.db._chunk_write import next_id as next_chunk_id
+from tgsis.db._chunk_write import stored_in_chunks
 from tgsis.db._settings import read_version_settings, restore_version_settings
 from tgsis.db._state_write import (
     PART_PROPERTY,
-    copy_cell_rows,
-    copy_vertex_rows,
     delete_rows,
     update_geometry_row,
+    write_model_rows,
     write_state_rows,
 )
 from tgsis.db._static import (
@@ -284,6 +285,8 @@ def _same_values(a: npt.NDArray[Any], b: npt.NDArray[Any]) -> npt.NDArray[np.boo
 
 def _next_id(conn: Conn, storage: Storage, table: str, key: str, idfield: str, geoid: int) -> int:
     """The first id above every id the object has ever had in ``table`` (every row version when versioned)."""
+    if stored_in_chunks(conn, table):
+        return next_chunk_id(conn, table, idfield, geoid)
     row = conn.execute(
         sql.SQL("SELECT max({}) FROM {} WHERE {} = %s").format(
             sql.Identifier(idfield), storage.table("tgsis", table), sql.Identifier(key)
@@ -387,27 +390,30 @@ def _write_diff(
             )
             inserted += len(rewrite)
 
-    deleted += delete_rows(conn, "tgsis", table, "geoid", geoid, idfield, stored.cell_ids[plan.removed_cells])
-    deleted += delete_rows(
-        conn,
-        "tgsis",
-        "vrtx",
-        "geoid",
-        geoid,
-        "vrtxid",
-        np.concatenate([stored.vertex_ids[plan.removed_vertices], vertex_ids[moved]]),
-    )
     written_v = np.concatenate([moved, added_v])
-    inserted += copy_vertex_rows(conn, storage, geoid, vertex_ids[written_v], edited.vertices[written_v])
-    inserted += copy_cell_rows(
-        conn,
-        storage,
-        table,
-        idfield,
-        geoid,
-        cell_ids[added_c],
-        vertex_ids[edited.cells[added_c]].reshape(-1, edited.cell_size),
-    )
+    for gone, added in (
+        write_model_rows(
+            conn,
+            storage,
+            table,
+            idfield,
+            geoid,
+            stored.cell_ids[plan.removed_cells],
+            cell_ids[added_c],
+            vertex_ids[edited.cells[added_c]].reshape(-1, edited.cell_size),
+        ),
+        write_model_rows(
+            conn,
+            storage,
+            "vrtx",
+            "vrtxid",
+            geoid,
+            np.concatenate([stored.vertex_ids[plan.removed_vertices], vertex_ids[moved]]),
+            vertex_ids[written_v],
+            edited.vertices[written_v],
+        ),
+    ):
+        deleted, inserted = deleted + gone, inserted + added
     return _Written(vertex_ids, cell_ids, cell_values, deleted, inserted, changes)
 
 
