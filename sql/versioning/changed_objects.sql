@@ -47,12 +47,16 @@ BEGIN
         -- owner may have created); read as the storage's owner from definer code
         RETURN QUERY SELECT v_t.objectclass, r[1], v_t.shortname, r[2] FROM tgsis.storage_run(v_t, false, format(
             'SELECT ARRAY[%s, md5(string_agg(pg_catalog.record_out(v.*)::text, ''|'' ORDER BY %s, v.revision))]
-               FROM %I.%I v
+               FROM %s v
               WHERE %s
               GROUP BY v.%I',
             tgsis.object_key_text_sql(v_t, 'v'),  -- the key's canonical text
-            (SELECT string_agg(format('v.%I', k), ', ' ORDER BY o) FROM unnest(v_t.keycolumns) WITH ORDINALITY AS u(k, o)),
-            v_t.schemaname, v_t.tablename || '_ver', v_where, v_t.objectkeyfield), p_1 => v_keys, p_2 => p_revisions) AS r;
+            -- (a model table stored in chunks: its chunk versions, keyed by object and chunk, issue 40)
+            CASE WHEN v_t.schemaname = 'tgsis' AND tgsis.stored_in_chunks(v_t.tablename)
+                 THEN format('v.%I, v.chunk', v_t.objectkeyfield)
+                 ELSE (SELECT string_agg(format('v.%I', k), ', ' ORDER BY o) FROM unnest(v_t.keycolumns) WITH ORDINALITY AS u(k, o)) END,
+            tgsis.storage_table(v_t.schemaname, v_t.tablename), v_where, v_t.objectkeyfield),
+            p_1 => v_keys, p_2 => p_revisions) AS r;
     END LOOP;
 END
 $$;

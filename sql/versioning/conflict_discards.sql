@@ -90,7 +90,7 @@ BEGIN
                             v.revision = ANY ($2) AND NOT (v.lastrevs && $2) AS in_base,
                             v.revision = ANY ($3) AND NOT (v.lastrevs && $3) AS in_child,
                             v.revision = ANY ($5::integer[]) AND NOT (v.lastrevs && $5::integer[]) AS in_parent
-                       FROM %3$I.%4$I v
+                       FROM %4$s v
                       WHERE v.%1$I = ANY ($1::%5$s[])
                         -- not a row version all three see (a base row neither side closed): rows of the object
                         -- that nobody changed cost a test, not a jsonb
@@ -123,7 +123,9 @@ BEGIN
                    FROM lost
                   GROUP BY obj, solution, discarded
                   ORDER BY obj, solution',
-                v_t.objectkeyfield, v_rowkey, v_t.schemaname, v_t.tablename || '_ver', tgsis.object_key_type(v_t),
+                -- (the row versions: <table>_ver, or the decoded chunks of a table stored in chunks, issue 40)
+                v_t.objectkeyfield, v_rowkey, v_t.schemaname, tgsis.storage_row_versions(v_t.schemaname, v_t.tablename),
+                tgsis.object_key_type(v_t),
                 v_t.keycolumns || v_t.objectkeyfield,
                 tgsis.object_key_text_sql(v_t, 'v'),  -- the key's canonical text, as the conflicts name it
                 v_differ),

@@ -112,7 +112,7 @@ DECLARE
     v_y       integer;
     v_obj     text := 'v.geoid = $1';
     v_cobj    text;
-    v_vsrc    text := 'tgsis.vrtx_ver';
+    v_vsrc    text;
     v_csrc    text;
     v_atoms   text := '';
 BEGIN
@@ -210,6 +210,10 @@ BEGIN
         v_obj := format('v.geoid = $1 AND v.timem = %L::float8 AND v.timet = %L::float8', p_timem, p_times);
         v_cobj := format('v.geoid = $1 AND v.timem = %L::float8', p_timem);
     END IF;
+    IF p_times IS NULL THEN  -- model 1: the rows of the storage, decoded chunk versions when stored in chunks
+        v_vsrc := tgsis.storage_row_versions('tgsis', 'vrtx');
+        v_csrc := tgsis.storage_row_versions('tgsis', v_table);
+    END IF;
     v_csrc := coalesce(v_csrc, format('tgsis.%I', v_table || '_ver'));
     v_cobj := coalesce(v_cobj, v_obj);
     v_row := format('ARRAY[%s]', (SELECT string_agg(format('v.vrtxid%s', i), ', ') FROM generate_series(1, v_k) AS i));
@@ -256,10 +260,10 @@ BEGIN
         v_ckeys := v_ckeys || ARRAY(SELECT r.key FROM tgsis.merge_property_rows(v_cpt, p_geoid, v_since, NULL, NULL, NULL, NULL, p_times, p_timem) AS r);
     END IF;
     IF v_runs THEN  -- the cells of a part run some set sees otherwise may change their part
-        EXECUTE format('SELECT $3 || ARRAY(SELECT c.%1$I FROM tgsis.%2$I c
+        EXECUTE format('SELECT $3 || ARRAY(SELECT c.%1$I FROM %2$s c
                                             JOIN (SELECT v.firstid, v.lastid FROM tgsis.part_ver v WHERE v.geoid = $1 AND %3$s) r
                                               ON c.%1$I BETWEEN r.firstid AND r.lastid
-                                           WHERE c.geoid = $1)', v_cellid, v_table || '_ver', v_changed)
+                                           WHERE c.geoid = $1)', v_cellid, v_csrc, v_changed)
            INTO v_ckeys USING p_geoid, v_since, v_ckeys;
     END IF;
     v_vkeys := ARRAY(SELECT DISTINCT k FROM unnest(v_vkeys) AS k);
