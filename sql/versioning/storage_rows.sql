@@ -6,16 +6,15 @@
 -- conflict_discards): they compare rows by the row key (keycolumns) and
 -- values, which the decoded view gives as <table>_ver did; a chunk version a
 -- set sees shows all its rows in that set, so the same visibility tests
--- hold. Writers act on the storage (tgsis.storage_table) instead.
+-- hold. Writers act on the storage (tgsis.storage_table) instead. The
+-- registry row's form of tgsis.storage_row_versions (which says how).
 CREATE FUNCTION tgsis.storage_rows(p_t tgsis.versioned_tables)
 RETURNS text
 LANGUAGE sql
 STABLE
 SET search_path = pg_catalog, pg_temp
 AS $$
-    SELECT CASE WHEN p_t.schemaname = 'tgsis' AND tgsis.stored_in_chunks(p_t.tablename)
-                THEN pg_catalog.format('tgsis.%I', p_t.tablename || '_chunk_rows')
-                ELSE tgsis.storage_table(p_t.schemaname, p_t.tablename) END
+    SELECT tgsis.storage_row_versions(p_t.schemaname, p_t.tablename)  -- the one place that names it
 $$;
 
 REVOKE ALL ON FUNCTION tgsis.storage_rows(tgsis.versioned_tables) FROM PUBLIC;
