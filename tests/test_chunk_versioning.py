@@ -378,3 +378,34 @@ def test_solved_conflicts_keep_their_solutions_and_regions_across_the_switch(con
     now = conn.execute("SELECT childmark, parentmark FROM tgsis.current_conflicts(1)").fetchall()
     assert now and now[0][0] != renewed[0][1] and now[0][1] == renewed[0][2]
     conn.rollback()
+
+
+def test_guarding_the_chunk_table_of_a_table_switched_while_versioned(
+    db_dsn: str, conn: Conn, fault_clone: int
+) -> None:
+    # (tgsis.store_in_chunks of a versioned table makes the chunk table without the storage's triggers: until it calls
+    # tgsis.guard_chunk_storage, a direct INSERT of a chunk version of any revision went in; called here as it would)
+    switch_all(conn)
+    for table in MODEL1:
+        conn.execute("SELECT tgsis.guard_chunk_storage(%s)", (table,))
+        conn.execute("SELECT tgsis.guard_chunk_storage(%s)", (table,))  # again: the same triggers, once
+    conn.commit()
+    assert conn.execute(
+        "SELECT count(*) FROM pg_trigger WHERE tgrelid = 'tgsis.trgl_chunk'::regclass AND tgname LIKE 'tgsis_storage_%%'"
+    ).fetchone() == (3,)
+    with login_roles(db_dsn, {"editor": "tgsis_editor"}) as roles:
+        tgsis.grant_version(conn, "e1", "write", roles.name("editor"))
+        conn.commit()
+        editor = roles.connect("editor")
+        editor.execute("SELECT tgsis.goto_version('e1')")
+        editor.commit()
+        state, message = sqlstate(
+            editor,
+            "INSERT INTO tgsis.vrtx_chunk (geoid, chunk, revision, x, y, z) VALUES (%s, 5, 0, '{1}', '{2}', '{3}')",
+            (fault_clone,),
+        )
+        assert state == "TG002" and "vrtx_chunk" in message, message
+        assert sqlstate(editor, "UPDATE tgsis.trgl_chunk SET lastrevs = '{}'")[0] == "42501"
+        editor.close()
+    state, message = sqlstate(conn, "SELECT tgsis.guard_chunk_storage('atom')")
+    assert state == "TG200" and "atom" in message
