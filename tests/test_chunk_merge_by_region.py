@@ -134,7 +134,10 @@ def by_region(conn: Conn, geoid: int) -> tuple[Any, ...]:
         "SELECT objectkey, solution FROM tgsis.conflicts WHERE versionid = tgsis.version_id('e1') ORDER BY 1"
     ).fetchall()
     conn.rollback()
-    return ("done", row[0], version_state(conn, "e1", geoid), version_state(conn, "DEFAULT", geoid), solved)
+    versions = [str(r[0]) for r in conn.execute("SELECT name FROM tgsis.versions ORDER BY versionid").fetchall()]
+    conn.rollback()
+    states = [version_state(conn, v, geoid) for v in versions]
+    return ("done", row[0], *states, solved)
 
 
 # ids in both vertex chunks (chunk 1 starts at 1024), the sides' edits meeting in chunk 0 and apart in chunk 1
@@ -145,11 +148,16 @@ EAST = np.array([1024 + 7, 1024 + 8, 1100])
 
 
 def three_sides(conn: Conn, geoid: int) -> None:
+    """e1 and DEFAULT edit the feature (five regions, one conflicting); another version, e2, made after DEFAULT's
+    edits, rewrites the same chunks (its chunk versions are in none of e1's three sets)."""
     move(conn, "e1", geoid, NORTH, (0.5, 0.0, 1.25))
     move(conn, "e1", geoid, MIDDLE, (0.0, 0.0, 5.0))
     move(conn, "e1", geoid, EAST, (-0.125, 0.0, 0.0))
     move(conn, "DEFAULT", geoid, SOUTH, (-1.0, 0.0, -2.0))
     move(conn, "DEFAULT", geoid, MIDDLE, (0.0, 0.0, -7.0))
+    tgsis.create_version(conn, "e2")
+    conn.commit()
+    move(conn, "e2", geoid, np.concatenate([NORTH, MIDDLE, EAST, SOUTH]), (9.0, 9.0, 9.0))
     conn.commit()
 
 
