@@ -19,6 +19,7 @@ import psycopg
 from psycopg import sql
 
 from tgsis._merge_slices import SlicedState, slice_text
+from tgsis.db._chunk_write import last_id
 from tgsis.db._settings import read_version_settings, restore_version_settings
 from tgsis.db._state_write import key_codes
 from tgsis.db._static import SIMPLEX
@@ -726,13 +727,19 @@ def _read_change(
     top = []
     for t, s in ((vertex_t, vertex_s), (cell_t, cell_s)):
         idcol = sql.Identifier(t.columns[0][0])
-        row = conn.execute(
-            sql.SQL(
+        if s == f"tgsis.{t.view}_chunk_rows":  # stored in chunks: the visible chunk versions' last ids, not decoded
+            query = sql.SQL("SELECT max({last}) FROM {chunks} v WHERE v.{key} = %s AND {visible}").format(
+                last=last_id(conn, t.view, "v"),
+                chunks=sql.Identifier("tgsis", f"{t.view}_chunk"),
+                key=sql.Identifier(t.key),
+                visible=_visible_in(sets),
+            )
+        else:
+            query = sql.SQL(
                 "SELECT v.{id} FROM {storage} v WHERE v.{key} = %s AND {visible} ORDER BY v.{id} DESC LIMIT 1"
-            ).format(id=idcol, storage=sql.SQL(s), key=sql.Identifier(t.key), visible=_visible_in(sets)),
-            (geoid,),
-        ).fetchone()
-        top.append(-1 if row is None else int(row[0]))
+            ).format(id=idcol, storage=sql.SQL(s), key=sql.Identifier(t.key), visible=_visible_in(sets))
+        row = conn.execute(query, (geoid,)).fetchone()
+        top.append(-1 if row is None or row[0] is None else int(row[0]))
 
     none = np.empty(0, dtype=np.int64)
     rows = {}
