@@ -12,6 +12,7 @@ is not switched already), so these tests run on chunks whatever
 
 from __future__ import annotations
 
+import threading
 from typing import Any
 
 import numpy as np
@@ -345,3 +346,50 @@ def test_the_merge_reads_the_changed_chunks_decoded_and_gets_the_three_full_read
     common, at_child, at_base = np.intersect1d(child.vertex_ids, base.vertex_ids, return_indices=True)
     moved = common[child.vertices[at_child, 2] != base.vertices[at_base, 2]]
     assert len(moved) and np.isin(moved, rows["child"].vertex_ids).all()
+
+
+def test_a_face_writer_of_the_object_waits_for_a_save_and_both_changes_stay(
+    conn: Conn, loaded: int, db_dsn: str
+) -> None:
+    """Two sessions: a save holds the object's write lock; an UPDATE of another vertex of it through the face waits,
+    then writes on top of the saved chunk (no lost update of either: the save's vertex 5 and the face's vertex 6)."""
+    base = _fetch(conn, loaded)
+    edited = base.copy()
+    edited.vertices[5, 2] = 42.0
+    other = psycopg.connect(db_dsn)
+    try:
+        conn.execute("SELECT 1")  # a transaction of the caller's: the save runs in it (a savepoint) and stays open
+        tgsis.save_feature(conn, "horizons", loaded, edited)
+        failures: list[BaseException] = []
+
+        def update() -> None:
+            try:
+                other.execute("UPDATE tgsis.vrtx SET z = -42.0 WHERE geoid = %s AND vrtxid = 6", (loaded,))
+                other.commit()
+            except BaseException as exc:  # noqa: BLE001 - reported below
+                failures.append(exc)
+
+        pid = other.info.backend_pid
+        worker = threading.Thread(target=update)
+        worker.start()
+        waiting = False
+        for _ in range(600):  # until the other session waits for a lock (not a timing assert: a bounded poll)
+            with psycopg.connect(db_dsn, autocommit=True) as probe:
+                row = probe.execute("SELECT wait_event_type FROM pg_stat_activity WHERE pid = %s", (pid,)).fetchone()
+            if row is not None and row[0] == "Lock":
+                waiting = True
+                break
+            worker.join(0.05)
+            if not worker.is_alive():
+                break
+        assert waiting, "the face's UPDATE did not wait for the save's lock"
+        conn.commit()
+        worker.join()
+        assert not failures, failures
+    finally:
+        other.close()
+    now = _fetch(conn, loaded)
+    assert now.vertices[5, 2] == 42.0 and now.vertices[6, 2] == -42.0
+    expected = edited.vertices.copy()
+    expected[6, 2] = -42.0
+    assert now.vertices.tobytes() == expected.tobytes()
