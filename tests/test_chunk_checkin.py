@@ -393,3 +393,36 @@ def test_a_face_writer_of_the_object_waits_for_a_save_and_both_changes_stay(
     expected = edited.vertices.copy()
     expected[6, 2] = -42.0
     assert now.vertices.tobytes() == expected.tobytes()
+
+
+def test_a_feature_of_a_class_without_versioning_is_saved_in_revision_0_in_place(conn: Conn) -> None:
+    """Feature versioning on, the class registered without it: its chunk versions stay revision 0, rewritten in place,
+    and no revision notes the object; a save from another version is refused (NotVersionedError), nothing written."""
+    F.create_feature_class(conn, "loose", "SURFACE", versioned=False)
+    tgsis.enable_feature_versioning(conn)
+    base = _grid(12)
+    geoid = F.insert_feature(conn, "loose", tgsis.Surface(base.vertices, base.cells))
+    conn.commit()
+    _switch(conn)
+    edited = tgsis.Surface(base.vertices.copy(), base.cells)
+    edited.vertices[3, 2] = 9.5
+    tgsis.create_version(conn, "v1")
+    conn.commit()
+    with tgsis.in_version(conn, "v1"), pytest.raises(tgsis.NotVersionedError):
+        tgsis.save_feature(conn, "loose", geoid, edited)
+    conn.rollback()
+    before = conn.execute("SELECT count(*) FROM tgsis.revision_objects WHERE objectkey = %s", (str(geoid),)).fetchone()
+    tgsis.save_feature(conn, "loose", geoid, edited)
+    conn.commit()
+    versions = conn.execute(
+        "SELECT array_agg(DISTINCT revision), count(*), bool_or(revclosed) FROM tgsis.vrtx_chunk WHERE geoid = %s",
+        (geoid,),
+    ).fetchone()
+    assert versions == ([0], 1, False)
+    after = conn.execute("SELECT count(*) FROM tgsis.revision_objects WHERE objectkey = %s", (str(geoid),)).fetchone()
+    assert after == before
+    for version in ("DEFAULT", "v1"):
+        with tgsis.in_version(conn, version):
+            z = conn.execute("SELECT z FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = 3", (geoid,)).fetchone()
+        conn.commit()
+        assert z == (9.5,)
