@@ -192,9 +192,15 @@ def test_a_check_in_merged_with_a_change_since_check_out_on_chunks(conn: Conn, l
 
 
 def test_a_role_may_save_on_chunks_only_with_the_rights_of_the_row_path(conn: Conn, loaded: int, db_dsn: str) -> None:
-    """A reader is refused; an editor without the right on the class too; an editor with it saves; nothing else moves."""
+    """A reader is refused; an editor without the right on the class too; an editor with it saves (a vertex moved,
+    one added with a triangle: its new ids read from the chunk tables as the editor); nothing else moves."""
     base = _fetch(conn, loaded)
-    edited = base.copy()
+    edited = tgsis.Surface(
+        np.concatenate([base.vertices, [[-5.0, -5.0, 1.0]]]),
+        np.concatenate([base.cells, [[0, 1, base.n_vertices]]]),
+        vertex_properties={"porosity": np.append(base.vertex_properties["porosity"], 0.25)},
+        name="grid",
+    )
     edited.vertices[10, 0] += 1.0
     with login_roles(db_dsn, {"rita": "tgsis_reader", "ed": "tgsis_editor"}) as made:
         rita, ed = made.connect("rita"), made.connect("ed")

@@ -20,6 +20,9 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
+from tgsis._chunks import CHUNK_SIZE
+from tgsis.db._chunk_transfer import chunk_table
+
 __all__ = ["last_id", "next_id", "stored_in_chunks", "write_object_rows"]
 
 Conn = psycopg.Connection[Any]
@@ -39,14 +42,11 @@ def last_id(conn: Conn, table: str, alias: str = "c") -> sql.Composable:
     ``chunk * chunksize + length - 1`` (of the first array, or of its
     ``_wide`` twin when the chunk's vertex ids are absolute): no decoding.
     """
-    first = conn.execute(
-        "SELECT c.name, c.role, m.chunksize FROM tgsis.chunk_columns(%s) c "
-        "JOIN tgsis.model_tables m ON m.tablename = %s "
-        "WHERE c.role IN ('float', 'ref') ORDER BY c.colorder LIMIT 1",
-        (table, table),
-    ).fetchone()
-    assert first is not None, f"tgsis.{table} has no chunk columns"
-    name, role, size = first
+    # the layout from the catalog, which every role may read (tgsis.chunk_columns is internal)
+    layout = chunk_table(conn, table)
+    name = layout.columns.names[0]
+    role = "ref" if name in layout.columns.refs else "float"
+    size = CHUNK_SIZE  # chunk_table refuses a chunk table of another size
     a = sql.Identifier(alias)
     length = (
         sql.SQL("cardinality({}.{})").format(a, sql.Identifier(name))
