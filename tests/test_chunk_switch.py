@@ -8,14 +8,17 @@ same rows afterwards, doubles by their bits.
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 import psycopg
+import pytest
 from psycopg import sql
 
 import tgsis
 from tests.merge_data import every_view, varied_history
 from tests.roles import login_roles
+from tgsis.testing import TestServer
 
 Conn = psycopg.Connection[Any]
 
@@ -175,6 +178,18 @@ def test_refusals_change_nothing(conn: Conn, fault_clone: int) -> None:
     assert state == "TG201" and "stored in chunks already" in message
 
 
+def test_partitioned_storage_is_not_switched(conn: Conn) -> None:
+    """A chunk table is plain: switching storage the DBA partitioned would undo the partitioning without a word."""
+    tgsis.partition_model_storage(conn, 1, 4)
+    conn.commit()
+    state, message = _sqlstate(conn, "SELECT tgsis.store_in_chunks('trgl')")
+    assert state == "TG100" and "partitioned" in message
+    assert conn.execute(
+        "SELECT tgsis.stored_in_chunks('trgl'), to_regclass('tgsis.trgl_chunk'), "
+        "(SELECT relkind FROM pg_class WHERE oid = 'tgsis.trgl'::regclass)"
+    ).fetchone() == (False, None, "p")
+
+
 def test_roles_of_tgsis_may_not_switch(db_dsn: str, conn: Conn, fault_clone: int) -> None:
     with login_roles(db_dsn, {"reader": "tgsis_reader", "editor": "tgsis_editor", "admin": "tgsis_admin"}) as roles:
         for short in ("reader", "editor", "admin"):
@@ -187,3 +202,34 @@ def test_roles_of_tgsis_may_not_switch(db_dsn: str, conn: Conn, fault_clone: int
         False,
         None,
     )
+
+
+@pytest.mark.parametrize("fmt", ["custom", "plain"])
+def test_a_switched_database_is_dumped_and_restored_whole(
+    pg: TestServer, db_dsn: str, conn: Conn, fault_clone: int, tmp_path: Path, fmt: str
+) -> None:
+    from tests.test_backup import _bindir_of, _restored
+
+    varied_history(conn, fault_clone)
+    _switch_all(conn)
+    conn.commit()
+    before = _everything_seen(conn)
+    conn.rollback()
+    with _restored(pg, _bindir_of(pg), db_dsn, fmt, tmp_path) as dsn, psycopg.connect(dsn) as copy:
+        assert copy.execute(
+            "SELECT bool_and(tgsis.stored_in_chunks(t)), min(tgsis.storage_table('tgsis', t)) "
+            "FROM unnest(ARRAY['vrtx', 'point', 'segment', 'trgl', 'tetra']) t"
+        ).fetchone() == (True, "tgsis.point_chunk")
+        assert _everything_seen(copy) == before
+        assert copy.execute("SELECT count(*) FROM tgsis.vrtx_shape").fetchone() == (0,)
+        # the restored face is written as before: in a child version, through today's names
+        tgsis.create_version(copy, "after restore")
+        copy.commit()
+        tgsis.goto_version(copy, "after restore")
+        copy.execute("UPDATE tgsis.vrtx SET x = x + 1 WHERE geoid = %s AND vrtxid = 40", (fault_clone,))
+        copy.commit()
+        moved = copy.execute("SELECT x FROM tgsis.vertex(%s, 40)", (fault_clone,)).fetchone()
+        tgsis.goto_version(copy, "DEFAULT")
+        copy.commit()
+        kept = copy.execute("SELECT x FROM tgsis.vertex(%s, 40)", (fault_clone,)).fetchone()
+        assert moved is not None and kept is not None and moved[0] == kept[0] + 1
