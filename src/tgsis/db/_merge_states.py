@@ -677,9 +677,20 @@ def _read_change(
         (v0 if alignment == "VERTEX" else c0).append(np.asarray(columns[1], dtype=np.int64))
     v0_ids, c0_ids = np.unique(np.concatenate(v0)), np.unique(np.concatenate(c0))
 
-    def cells(where: sql.Composable) -> list[npt.NDArray[Any]]:
+    def holding(t: _Table, s: str, ids: npt.NDArray[np.int64]) -> str:
+        """The relation to read rows of ``ids`` from: of a table stored in chunks, only the chunks holding them
+        decoded (``tgsis.storage_row_versions``, the merges' one way to name it); else the storage ``s``."""
+        if s != f"tgsis.{t.view}_chunk_rows" or not len(ids):
+            return s
+        row = conn.execute(
+            "SELECT tgsis.storage_row_versions(%s, %s, %s::bigint[])", (t.schema, t.view, np.unique(ids).tolist())
+        ).fetchone()
+        assert row is not None
+        return str(row[0])  # a parenthesized subquery, aliased by the reads
+
+    def cells(where: sql.Composable, within: str = cell_s) -> list[npt.NDArray[Any]]:
         return columns_out_all(
-            conn, [Packed(_rows_where(cell_t, cell_s, sets, where), cell_t.key, cell_cols, [geoid])]
+            conn, [Packed(_rows_where(cell_t, within, sets, where), cell_t.key, cell_cols, [geoid])]
         )[0]
 
     def on(vertex_ids: npt.NDArray[np.int64]) -> sql.Composable:
@@ -699,7 +710,10 @@ def _read_change(
         return sql.SQL("({}) AND ({})").format(spans, exact)
 
     by_id = (
-        cells(sql.SQL("v.{} = ANY ({})").format(sql.Identifier(cell_t.columns[0][0]), _int8_array(c0_ids)))
+        cells(
+            sql.SQL("v.{} = ANY ({})").format(sql.Identifier(cell_t.columns[0][0]), _int8_array(c0_ids)),
+            holding(cell_t, cell_s, c0_ids),
+        )
         if len(c0_ids)
         else None
     )
@@ -720,7 +734,12 @@ def _read_change(
     read = columns_out_all(
         conn,
         [
-            Packed(_rows_where(t, s, sets, by_ids(t, ids)), t.key, (*t.columns, ("_seen", "int4")), [geoid])
+            Packed(
+                _rows_where(t, holding(t, s, ids), sets, by_ids(t, ids)),
+                t.key,
+                (*t.columns, ("_seen", "int4")),
+                [geoid],
+            )
             for t, s, ids in wanted
         ],
     )
