@@ -682,6 +682,11 @@ def _read_change(
         decoded (``tgsis.storage_row_versions``, the merges' one way to name it); else the storage ``s``."""
         if s != f"tgsis.{t.view}_chunk_rows" or not len(ids):
             return s
+        allowed = conn.execute(  # (granted to tgsis's roles: another role reads the decoded view, as before)
+            "SELECT has_function_privilege('tgsis.storage_row_versions(text, text, bigint[])', 'EXECUTE')"
+        ).fetchone()
+        if not (allowed and allowed[0]):
+            return s
         row = conn.execute(
             "SELECT tgsis.storage_row_versions(%s, %s, %s::bigint[])", (t.schema, t.view, np.unique(ids).tolist())
         ).fetchone()
