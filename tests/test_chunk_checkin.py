@@ -432,3 +432,28 @@ def test_a_feature_of_a_class_without_versioning_is_saved_in_revision_0_in_place
             z = conn.execute("SELECT z FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = 3", (geoid,)).fetchone()
         conn.commit()
         assert z == (9.5,)
+
+
+def test_a_save_in_a_repeatable_read_session_is_refused_by_name_and_writes_nothing(conn: Conn, loaded: int) -> None:
+    """A session whose transactions are REPEATABLE READ: the chunk writer waits for concurrent writers and must see
+    what they committed, so the save is refused (TG300, naming the isolation level) rather than written from an
+    older snapshot; the row path refuses its deletes alike (tgsis.close_object_rows). Even an edit that only adds."""
+    base = _fetch(conn, loaded)
+    grown = tgsis.Surface(
+        np.concatenate([base.vertices, [[-5.0, -5.0, 1.0]]]),
+        np.concatenate([base.cells, [[0, 1, base.n_vertices]]]),
+        vertex_properties={"porosity": np.append(base.vertex_properties["porosity"], 0.25)},
+        name="grid",
+    )
+    conn.execute("SET default_transaction_isolation = 'repeatable read'")
+    conn.commit()
+    with pytest.raises(tgsis.VersioningError, match="REPEATABLE READ") as refused:
+        tgsis.save_feature(conn, "horizons", loaded, grown)
+    assert refused.value.sqlstate == "TG300"
+    conn.rollback()
+    conn.execute("SET default_transaction_isolation = 'read committed'")
+    conn.commit()
+    assert _same(_fetch(conn, loaded), base)
+    tgsis.save_feature(conn, "horizons", loaded, grown)  # READ COMMITTED again: written
+    conn.commit()
+    assert _same(_fetch(conn, loaded), grown)
