@@ -449,13 +449,12 @@ def test_a_side_connection_to_another_database_is_refused_not_read(db_dsn: str, 
 def test_a_hostile_search_path_changes_nothing_the_face_and_keyed_reads_do(conn: Conn, fault_clone: int) -> None:
     """Relations and functions named like the internals, in pg_temp and public, first on the search path."""
     geoid = fault_clone
-    conn.execute("SELECT tgsis.create_chunk_table('vrtx'), tgsis.create_chunk_view('vrtx')")
-    conn.execute("SELECT tgsis.rows_to_chunks('vrtx')")
-    conn.execute("SELECT tgsis.create_chunk_face('vrtx', 'vrtx_face')")
+    # the storage switch (tgsis.vertex reads the chunks once they are the storage, not merely once they exist)
+    conn.execute("SELECT tgsis.store_in_chunks('vrtx') WHERE NOT tgsis.stored_in_chunks('vrtx')")
     conn.commit()
     tgsis.goto_version(conn, "e1")
     conn.commit()
-    read = "SELECT vrtxid, float8send(x) FROM tgsis.vrtx_face WHERE geoid = %s ORDER BY 1"
+    read = "SELECT vrtxid, float8send(x) FROM tgsis.vrtx WHERE geoid = %s ORDER BY 1"
     before = conn.execute(read, (geoid,)).fetchall()
     one = conn.execute("SELECT float8send(x) FROM tgsis.vertex(%s, 3)", (geoid,)).fetchall()
     for name in ("vrtx_chunk", "versioned_tables", "model_tables", "versions", "revisions"):
@@ -469,8 +468,8 @@ def test_a_hostile_search_path_changes_nothing_the_face_and_keyed_reads_do(conn:
     conn.execute("SET search_path = pg_temp, public, tgsis, pg_catalog")
     assert conn.execute(read, (geoid,)).fetchall() == before
     assert conn.execute("SELECT float8send(x) FROM tgsis.vertex(%s, 3)", (geoid,)).fetchall() == one
-    assert conn.execute("UPDATE tgsis.vrtx_face SET x = 7 WHERE geoid = %s AND vrtxid = 3", (geoid,)).rowcount == 1
-    assert conn.execute("INSERT INTO tgsis.vrtx_face VALUES (%s, 5000, 1, 2, 3)", (geoid,)).rowcount == 1
+    assert conn.execute("UPDATE tgsis.vrtx SET x = 7 WHERE geoid = %s AND vrtxid = 3", (geoid,)).rowcount == 1
+    assert conn.execute("INSERT INTO tgsis.vrtx VALUES (%s, 5000, 1, 2, 3)", (geoid,)).rowcount == 1
     conn.execute("RESET search_path")
     assert conn.execute("SELECT x FROM tgsis.vertex(%s, 3)", (geoid,)).fetchall() == [(7.0,)]
     assert conn.execute("SELECT x, y, z FROM tgsis.vertex(%s, 5000)", (geoid,)).fetchall() == [(1.0, 2.0, 3.0)]
@@ -480,12 +479,6 @@ def test_a_hostile_search_path_changes_nothing_the_face_and_keyed_reads_do(conn:
     conn.rollback()
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="tgsis.vertex/vertices read tgsis.vrtx_chunk as soon as it exists, not once it is the storage: "
-    "after rows_to_chunks (which keeps the rows) a write through today's tgsis.vrtx is not seen by them; "
-    "fix: read the chunks only when tgsis.vrtx is the chunk face (the storage switch's marker), else the rows",
-)
 def test_keyed_reads_follow_the_storage_not_the_existence_of_a_chunk_table(conn: Conn, fault_clone: int) -> None:
     geoid = fault_clone
     conn.execute("SELECT tgsis.create_chunk_table('vrtx'), tgsis.create_chunk_view('vrtx')")

@@ -3,8 +3,10 @@
 -- read by the chunk table's primary key (one probe per distinct chunk the
 -- planner's nested loop visits), its slot taken. Rows come in the order of
 -- p_ids (an id given twice comes twice); an absent id gives no row. Until
--- the storage switch creates tgsis.vrtx_chunk it reads today's rows
--- (tgsis.vrtx). Visibility and rights as tgsis.vertex.
+-- the storage switch makes tgsis.vrtx_chunk the storage
+-- (tgsis.stored_in_chunks: not merely once the chunk table exists, which
+-- tgsis.rows_to_chunks fills while the rows stay the storage) it reads
+-- today's rows (tgsis.vrtx). Visibility and rights as tgsis.vertex.
 CREATE FUNCTION tgsis.vertices(p_geoid bigint, p_ids bigint[])
 RETURNS TABLE (vrtxid bigint, x double precision, y double precision, z double precision)
 LANGUAGE plpgsql
@@ -16,7 +18,7 @@ DECLARE
     v_size bigint;
     v_set  integer[];
 BEGIN
-    IF to_regclass('tgsis.vrtx_chunk') IS NULL THEN
+    IF NOT tgsis.stored_in_chunks('vrtx') THEN
         RETURN QUERY
         SELECT u.id, v.x, v.y, v.z
           FROM unnest(p_ids) WITH ORDINALITY AS u(id, o) JOIN tgsis.vrtx v ON v.geoid = p_geoid AND v.vrtxid = u.id
@@ -39,4 +41,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.vertices(bigint, bigint[]) IS
-    'vertices (vrtxid, x, y, z) of object p_geoid by their ids, in the order of p_ids (absent ids: no row), each read from its chunk by key (tgsis.vrtx_chunk, the session''s visible versions; today''s rows of tgsis.vrtx until model 1 is stored in chunks); the caller''s rights apply';
+    'vertices (vrtxid, x, y, z) of object p_geoid by their ids, in the order of p_ids (absent ids: no row), each read from its chunk by key (tgsis.vrtx_chunk, the session''s visible versions; today''s rows of tgsis.vrtx until tgsis.stored_in_chunks(''vrtx'')); the caller''s rights apply';

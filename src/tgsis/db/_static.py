@@ -548,7 +548,7 @@ def restore_extras(
         pairs = [(int(a), int(r)) for a, r in positions]
         patoms = [int(a) for (a, _), p in zip(positions, flags[found]) if p]
     if file_convention:
-        restore_meaning(mesh, part.zpositive, part.crs, part.color, part.metadata, pairs, patoms)
+        restore_meaning(mesh, part.zpositive, part.crs, part.color, part.metadata, pairs, patoms, vertex_ids)
     elif pairs:
         mesh.metadata = {**mesh.metadata, "gocad_atoms": [list(p) for p in pairs]}
         if patoms:
