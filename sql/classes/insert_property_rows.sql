@@ -69,9 +69,7 @@ BEGIN
                                          CASE WHEN v_versioned THEN ', s.revision, s.lastrevs' ELSE '' END,
                                          -- stored in chunks: every chunk version's rows, each with its
                                          -- revision and lastrevs (the decoded view, no visibility filter)
-                                         CASE WHEN tgsis.stored_in_chunks(v_source)
-                                              THEN format('tgsis.%I', v_source || '_chunk_rows')
-                                              ELSE tgsis.storage_table('tgsis', v_source) END,
+                                         tgsis.storage_row_versions('tgsis', v_source),
                                          CASE WHEN v_source_versioned AND NOT v_versioned THEN ' AND NOT s.revclosed' ELSE '' END);
     END LOOP;
     EXECUTE format('WITH made AS (INSERT INTO %s (_geoid, _idx%s%s) SELECT r.* %s FROM (%s) AS r RETURNING _geoid, _idx)
