@@ -26,13 +26,16 @@ Conn = psycopg.Connection[Any]
 MODEL1 = ("vrtx", "point", "segment", "trgl", "tetra")
 
 
-def switch_all(conn: Conn) -> None:
-    """Every model-1 table stored in chunks (committed)."""
+def switch_all(conn: Conn) -> bool:
+    """Every model-1 table stored in chunks (committed); whether some were switched here (not by the harness)."""
+    switched = False
     for table in MODEL1:
         if not (conn.execute("SELECT tgsis.stored_in_chunks(%s)", (table,)).fetchone() or (False,))[0]:
             conn.execute("SELECT tgsis.store_in_chunks(%s)", (table,))
+            switched = True
     conn.commit()
     assert conn.execute("SELECT tgsis.storage_table('tgsis', 'vrtx')").fetchone() == ("tgsis.vrtx_chunk",)
+    return switched
 
 
 def vertices(conn: Conn) -> list[tuple[Any, ...]]:
@@ -319,3 +322,90 @@ def test_objects_deleted_in_a_version_close_their_chunk_versions(conn: Conn, fau
     ).fetchall()
     assert changed == [("trgl", str(fault_clone)), ("vrtx", str(fault_clone))]
     conn.rollback()
+
+
+def test_a_reader_diffs_and_reads_versions_of_chunked_tables_with_its_own_rights(
+    db_dsn: str, conn: Conn, fault_clone: int
+) -> None:
+    # (the decoded chunks are read as the caller: tgsis.storage_rows and storage_key are the tgsis roles' to run)
+    switch_all(conn)
+    move(conn, "e1", fault_clone, [3, 4], (0.5, 0.5, 0.5))
+    conn.commit()
+    diff = (
+        "SELECT objectkey, shortname, added, removed, changed FROM tgsis.diff_versions('DEFAULT', 'e1') ORDER BY 1, 2"
+    )
+    rows = "SELECT count(*), sum(x) FROM tgsis.rows_at(NULL::tgsis.vrtx, 'e1')"
+    expected = (conn.execute(diff).fetchall(), conn.execute(rows).fetchone())
+    assert (str(fault_clone), "vrtx", 0, 0, 2) in expected[0]
+    conn.rollback()
+    with login_roles(db_dsn, {"reader": "tgsis_reader"}) as roles:
+        reader = roles.connect("reader")
+        assert (reader.execute(diff).fetchall(), reader.execute(rows).fetchone()) == expected
+        assert reader.execute("SELECT count(*) FROM tgsis.changed_objects(ARRAY[1, 2, 3])").fetchone() != (0,)
+        reader.close()
+
+
+def test_solved_conflicts_keep_their_solutions_and_regions_across_the_switch(conn: Conn, fault_clone: int) -> None:
+    # (the marks of a conflict fingerprint the stored versions: rows before the switch, chunk versions after it; the
+    # next find_conflicts took every solved conflict for one changed again. tgsis.conflict_marks before the switch and
+    # tgsis.renew_conflict_marks after it carry them)
+    move(conn, "e1", fault_clone, [5], (0.0, 0.0, 1.0))
+    move(conn, "DEFAULT", fault_clone, [5], (0.0, 0.0, -1.0))
+    conn.commit()
+    assert [c.solution for c in tgsis.find_conflicts(conn, "e1")] == ["unsolved"]
+    conn.execute("SELECT tgsis.resolve_conflict('e1', 'feature', %s, 'child')", (str(fault_clone),))
+    conn.commit()
+    stored = "SELECT solution, childmark, parentmark FROM tgsis.conflicts ORDER BY objectkey"
+    regions = "SELECT count(*) FROM tgsis.conflict_regions"
+    solved = conn.execute(stored).fetchall()
+    n_regions = conn.execute(regions).fetchone()
+    assert [r[0] for r in solved] == ["child"] and n_regions != (0,)
+    before = conn.execute("SELECT tgsis.conflict_marks()::text, jsonb_array_length(tgsis.conflict_marks())").fetchone()
+    assert before is not None and before[1] == 1
+    if switch_all(conn):
+        # the objects' marks are not the stored ones any more
+        now = conn.execute("SELECT childmark, parentmark FROM tgsis.current_conflicts(1)").fetchall()
+        assert now and now[0] != solved[0][1:]
+    assert conn.execute("SELECT tgsis.renew_conflict_marks(%s::jsonb)", (before[0],)).fetchone() == (1,)
+    conn.commit()
+    assert conn.execute("SELECT solution FROM tgsis.find_conflicts('e1')").fetchall() == [("child",)]
+    assert conn.execute(regions).fetchone() == n_regions
+    conn.commit()
+    # a later change on either side still shows: the object's marks move away from the stored ones
+    renewed = conn.execute(stored).fetchall()
+    move(conn, "e1", fault_clone, [5], (0.0, 0.0, 1.0))
+    conn.commit()
+    now = conn.execute("SELECT childmark, parentmark FROM tgsis.current_conflicts(1)").fetchall()
+    assert now and now[0][0] != renewed[0][1] and now[0][1] == renewed[0][2]
+    conn.rollback()
+
+
+def test_guarding_the_chunk_table_of_a_table_switched_while_versioned(
+    db_dsn: str, conn: Conn, fault_clone: int
+) -> None:
+    # (tgsis.store_in_chunks of a versioned table makes the chunk table without the storage's triggers: until it calls
+    # tgsis.guard_chunk_storage, a direct INSERT of a chunk version of any revision went in; called here as it would)
+    switch_all(conn)
+    for table in MODEL1:
+        conn.execute("SELECT tgsis.guard_chunk_storage(%s)", (table,))
+        conn.execute("SELECT tgsis.guard_chunk_storage(%s)", (table,))  # again: the same triggers, once
+    conn.commit()
+    assert conn.execute(
+        "SELECT count(*) FROM pg_trigger WHERE tgrelid = 'tgsis.trgl_chunk'::regclass AND tgname LIKE 'tgsis_storage_%%'"
+    ).fetchone() == (3,)
+    with login_roles(db_dsn, {"editor": "tgsis_editor"}) as roles:
+        tgsis.grant_version(conn, "e1", "write", roles.name("editor"))
+        conn.commit()
+        editor = roles.connect("editor")
+        editor.execute("SELECT tgsis.goto_version('e1')")
+        editor.commit()
+        state, message = sqlstate(
+            editor,
+            "INSERT INTO tgsis.vrtx_chunk (geoid, chunk, revision, x, y, z) VALUES (%s, 5, 0, '{1}', '{2}', '{3}')",
+            (fault_clone,),
+        )
+        assert state == "TG002" and "vrtx_chunk" in message, message
+        assert sqlstate(editor, "UPDATE tgsis.trgl_chunk SET lastrevs = '{}'")[0] == "42501"
+        editor.close()
+    state, message = sqlstate(conn, "SELECT tgsis.guard_chunk_storage('atom')")
+    assert state == "TG200" and "atom" in message

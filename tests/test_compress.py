@@ -329,17 +329,20 @@ def test_merged_away_revisions_go_unless_a_child_reads_them(conn: Conn, tree: di
     a, c = tree["ids"]["A"], tree["ids"]["C"]
     vertices = _one(conn, "SELECT tgsis.storage_table('tgsis', 'vrtx')")  # (one row or chunk per object written)
     written = f"SELECT count(*) FROM {vertices} WHERE revision = %s"
-    lastrevs = f"SELECT lastrevs FROM {vertices} WHERE geoid = %s AND {_first_vertex(conn)} AND revision = 0"
+    # the stored version of vertex 0 that side's edit closed (a row: revision 0; a chunk: the version side saw)
+    closed = f"SELECT revision FROM {vertices} WHERE geoid = %s AND {_first_vertex(conn)} AND %s = ANY (lastrevs)"
+    lastrevs = f"SELECT lastrevs FROM {vertices} WHERE geoid = %s AND {_first_vertex(conn)} AND revision = %s"
     assert (_one(conn, written, (side,)), _one(conn, written, (edit,))) == (2, 1)
-    assert side in _one(conn, lastrevs, (a,)) and side in _one(conn, lastrevs, (c,))
+    ra, rc = _one(conn, closed, (a, side)), _one(conn, closed, (c, side))
+    assert side in _one(conn, lastrevs, (a, ra)) and side in _one(conn, lastrevs, (c, rc))
     tgsis.compress_versions(conn)
     kept = {r for (r,) in conn.execute("SELECT revision FROM tgsis.revisions").fetchall()}
     assert side not in kept  # side's merged changes are DEFAULT's now
     assert edit in kept  # child's conflict check compares with it
     assert (_one(conn, written, (side,)), _one(conn, written, (edit,))) == (0, 1)
     # side's revision is trimmed from lastrevs, except on the row child's conflict fingerprints
-    assert side not in _one(conn, lastrevs, (c,))
-    assert side in _one(conn, lastrevs, (a,))
+    assert side not in _one(conn, lastrevs, (c, rc))
+    assert side in _one(conn, lastrevs, (a, ra))
 
 
 def test_conflicts_and_their_solutions_stay(conn: Conn, tree: dict[str, Any]) -> None:
