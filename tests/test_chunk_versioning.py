@@ -362,12 +362,11 @@ def test_solved_conflicts_keep_their_solutions_and_regions_across_the_switch(con
     assert [r[0] for r in solved] == ["child"] and n_regions != (0,)
     before = conn.execute("SELECT tgsis.conflict_marks()::text, jsonb_array_length(tgsis.conflict_marks())").fetchone()
     assert before is not None and before[1] == 1
-    if switch_all(conn):
-        # the objects' marks are not the stored ones any more
+    if switch_all(conn):  # the switch renews the marks (tgsis.store_in_chunks: conflict_marks, renew_conflict_marks)
+        renewed_marks = conn.execute(stored).fetchall()
+        assert renewed_marks[0][1:] != solved[0][1:]  # the marks are the chunk versions' now
         now = conn.execute("SELECT childmark, parentmark FROM tgsis.current_conflicts(1)").fetchall()
-        assert now and now[0] != solved[0][1:]
-    assert conn.execute("SELECT tgsis.renew_conflict_marks(%s::jsonb)", (before[0],)).fetchone() == (1,)
-    conn.commit()
+        assert now == [renewed_marks[0][1:]]
     assert conn.execute("SELECT solution FROM tgsis.find_conflicts('e1')").fetchall() == [("child",)]
     assert conn.execute(regions).fetchone() == n_regions
     conn.commit()
@@ -383,11 +382,12 @@ def test_solved_conflicts_keep_their_solutions_and_regions_across_the_switch(con
 def test_guarding_the_chunk_table_of_a_table_switched_while_versioned(
     db_dsn: str, conn: Conn, fault_clone: int
 ) -> None:
-    # (tgsis.store_in_chunks of a versioned table makes the chunk table without the storage's triggers: until it calls
-    # tgsis.guard_chunk_storage, a direct INSERT of a chunk version of any revision went in; called here as it would)
+    # (tgsis.store_in_chunks of a versioned table made the chunk table without the storage's triggers: a direct
+    # INSERT of a chunk version of any revision went in; it calls tgsis.guard_chunk_storage now)
     switch_all(conn)
+    guards = "SELECT count(*) FROM pg_trigger WHERE tgrelid = 'tgsis.trgl_chunk'::regclass AND tgname LIKE 'tgsis_storage_%%'"
+    assert conn.execute(guards).fetchone() == (3,)  # by the switch itself
     for table in MODEL1:
-        conn.execute("SELECT tgsis.guard_chunk_storage(%s)", (table,))
         conn.execute("SELECT tgsis.guard_chunk_storage(%s)", (table,))  # again: the same triggers, once
     conn.commit()
     assert conn.execute(

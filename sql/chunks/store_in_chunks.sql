@@ -14,8 +14,11 @@
 --    of the relation it replaces, and the row storage is dropped: the table,
 --    or the versioned view, its <table>_ver, write queue, write function and
 --    runner. A versioned table stays registered (tgsis.versioned_tables): the
---    chunk table is its storage (tgsis.storage_table), the face decides
---    visibility at each read.
+--    chunk table is its storage (tgsis.storage_table), guarded as <table>_ver
+--    was (tgsis.guard_chunk_storage), the face decides visibility at each read;
+-- 4. the conflicts solved before keep their solutions and regions: their marks
+--    (fingerprints of the stored versions) are renewed (tgsis.conflict_marks,
+--    tgsis.renew_conflict_marks).
 -- Views of the users' own over the table block the drop (PostgreSQL names
 -- them, nothing changes). Refused by name: a table not registered for chunks
 -- (TG200), one stored in chunks already (TG201), partitioned storage (TG100). Returns the chunk versions
@@ -34,6 +37,7 @@ DECLARE
     v_pkey      text;
     v_n         bigint;
     v_name      text;
+    v_marks     jsonb;
 BEGIN
     PERFORM FROM tgsis.chunk_columns(p_table);  -- TG200 not registered for chunks, TG100 does not fit
     IF tgsis.stored_in_chunks(p_table) THEN
@@ -53,6 +57,10 @@ BEGIN
                   HINT = 'keep this table stored as rows';
     END IF;
     SELECT * INTO v_versioned FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table;
+
+    -- the conflicts' marks fingerprint the stored versions, which the switch changes without changing what any
+    -- version sees: read before, renewed after (tgsis.renew_conflict_marks), solved conflicts stay solved
+    v_marks := tgsis.conflict_marks();
 
     -- 1. the chunks, verified against every set
     PERFORM tgsis.create_chunk_table(p_table);
@@ -101,6 +109,10 @@ BEGIN
     END IF;
     EXECUTE format('DROP TABLE %s', v_storage);
     EXECUTE format('ALTER VIEW tgsis.%I RENAME TO %I', p_table || '_face', p_table);
+    IF v_versioned.tablename IS NOT NULL THEN
+        PERFORM tgsis.guard_chunk_storage(p_table);  -- the rights, labels and notes <table>_ver's triggers kept
+    END IF;
+    PERFORM tgsis.renew_conflict_marks(v_marks);
     RETURN v_n;
 END
 $$;
