@@ -12,6 +12,7 @@ from psycopg import sql
 import tgsis
 from tgsis.db import features as F
 from tgsis.db.classes import class_of_feature
+from tgsis.mesh import Surface
 
 Conn = psycopg.Connection[Any]
 
@@ -101,3 +102,81 @@ def with_duplicated_triangle(state: Any) -> Any:
         cells=np.vstack([state.cells, state.cells[:1, [1, 2, 0]]]),
         cell_properties={k: np.append(v, np.asarray(v)[:1]) for k, v in state.cell_properties.items()},
     )
+
+
+def every_view(conn: Conn) -> list[tuple[str, int | None]]:
+    """(version, revision) of every working set (revision None) and every revision a version can look at."""
+    views: list[tuple[str, int | None]] = [
+        (r[0], None) for r in conn.execute("SELECT name FROM tgsis.versions ORDER BY versionid").fetchall()
+    ]
+    views += [
+        (r[0], int(r[1]))
+        for r in conn.execute(
+            "SELECT v.name, r.revision FROM tgsis.versions v JOIN tgsis.revisions r "
+            "ON (r.revision = ANY (v.workingset) OR r.versionid = v.versionid) AND r.visibleset IS NOT NULL "
+            "ORDER BY 1, 2"
+        ).fetchall()
+    ]
+    return views
+
+
+def varied_history(conn: Conn, geoid: int) -> None:
+    """Rows with real revisions and lastrevs, through the public API only (on top of make_fault: DEFAULT, e1).
+
+    Moves in two versions, saved revisions, a check-in deleting a grid row, an object inserted then
+    deleted, two merges, a version deleting the object (the chunk conversion and switch tests).
+    """
+    move(conn, "e1", geoid, [0, 1, 2, 50], (1.5, -2.25, 0.125))
+    tgsis.save_revision(conn, "e1 first")
+    conn.commit()
+    move(conn, "e1", geoid, [3, 50, 143], (0.0, 0.0, -7.0))
+    tgsis.create_version(conn, "e2", "e1")
+    conn.commit()
+    move(conn, "e2", geoid, [10, 11], (3.0, 3.0, 3.0))
+    # a deletion of vertices and triangles: the last row of the grid goes in a check-in by difference
+    with tgsis.in_version(conn, "e2"):
+        state = F.fetch_feature(conn, "faults", geoid).mesh
+        assert isinstance(state, Surface)
+        keep = np.arange(state.n_vertices - 12)
+        inside = np.all(state.cells < len(keep), axis=1)
+        smaller = Surface(
+            state.vertices[keep],
+            state.cells[inside],
+            vertex_properties={k: v[keep] for k, v in state.vertex_properties.items()},
+            cell_properties={k: v[inside] for k, v in state.cell_properties.items()},
+        )
+        tgsis.save_feature(conn, "faults", geoid, smaller)
+        conn.commit()
+    # another object, inserted then deleted in e1's history
+    with tgsis.in_version(conn, "e1"):
+        triangle = Surface(
+            np.eye(3) * 4.0,
+            np.array([[0, 1, 2]]),
+            vertex_properties={"porosity": np.array([0.1, 0.2, 0.3])},
+            cell_properties={"facies": np.array([2], dtype=np.int32)},
+        )
+        other = F.insert_feature(conn, "faults", triangle)
+        conn.commit()
+    tgsis.goto_version(conn, "e1")
+    tgsis.save_revision(conn, "with other")
+    conn.commit()
+    with tgsis.in_version(conn, "e1"):
+        move(conn, "e1", other, [1], (0.5, 0.5, 0.5))
+        assert F.delete_feature(conn, "faults", other)
+        conn.commit()
+    tgsis.goto_version(conn, "DEFAULT")
+    conn.commit()
+    # a merge into the parent (e2 -> e1), and e1 -> DEFAULT
+    tgsis.merge_version(conn, "e2")
+    conn.commit()
+    tgsis.merge_version(conn, "e1")
+    conn.commit()
+    move(conn, "e2", geoid, [20], (1.0, 0.0, 0.0))
+    # a version that deletes the whole object
+    tgsis.create_version(conn, "gone")
+    conn.commit()
+    with tgsis.in_version(conn, "gone"):
+        assert F.delete_feature(conn, "faults", geoid)
+        conn.commit()
+    move(conn, "DEFAULT", geoid, [30, 31], (0.0, -1.0, 0.0))
+    conn.commit()

@@ -23,8 +23,15 @@ def fault(conn: Conn, fault_clone: int) -> int:
     return fault_clone  # make_fault's, built once (tests/conftest.py)
 
 
+def _storage(conn: Conn, table: str) -> str:
+    """Where ``tgsis.<table>``'s rows are stored (``_ver``, or the chunk table once stored in chunks), quoted."""
+    row = conn.execute("SELECT tgsis.storage_table('tgsis', %s)", (table,)).fetchone()
+    assert row is not None
+    return str(row[0])
+
+
 def _tables(conn: Conn) -> dict[str, list[Any]]:
-    tables = ("tgsis.vrtx_ver", "tgsis.trgl_ver", "tgsis.geometry_ver", "tgsis.versions")
+    tables = (*(_storage(conn, t) for t in ("vrtx", "trgl", "geometry")), "tgsis.versions")
     state = {t: conn.execute(f"SELECT * FROM {t} ORDER BY 1, 2, 3").fetchall() for t in tables}
     conn.commit()
     return state
@@ -382,7 +389,8 @@ def test_vertices_and_triangles_reordered_by_the_tool_keep_their_rows(conn: Conn
         vertex_properties={"porosity": base.vertex_properties["porosity"][order]},
         cell_properties={"facies": base.cell_properties["facies"][::-1]},
     )
-    before = conn.execute("SELECT count(*) FROM tgsis.trgl_ver").fetchone()
+    trgl = _storage(conn, "trgl")
+    before = conn.execute(f"SELECT count(*) FROM {trgl}").fetchone()
     result = tgsis.checkin(conn, co, mine, on_conflict="merge")
     conn.commit()
     assert result.merged
@@ -393,5 +401,5 @@ def test_vertices_and_triangles_reordered_by_the_tool_keep_their_rows(conn: Conn
     np.testing.assert_array_equal(ids, np.arange(SIDE * SIDE))
     assert xyz.tobytes() == expected.tobytes()
     assert cells == {(i, *map(int, c)) for i, c in enumerate(curved_surface().cells)}  # as stored, corner order too
-    assert conn.execute("SELECT count(*) FROM tgsis.trgl_ver").fetchone() == before  # no triangle row rewritten
+    assert conn.execute(f"SELECT count(*) FROM {trgl}").fetchone() == before  # no triangle row (or chunk) rewritten
     assert result.save.rows_written == len(NORTH) * 2 + 1  # vertex rows closed and added, the geometry row

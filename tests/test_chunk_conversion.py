@@ -22,7 +22,7 @@ import pytest
 from psycopg import sql
 
 import tgsis
-from tests.merge_data import curved_surface, move
+from tests.merge_data import curved_surface, every_view, move, varied_history
 from tests.roles import login_roles
 from tgsis.db import features as F
 from tgsis.mesh import Surface
@@ -69,29 +69,13 @@ def _chunk_view(conn: Conn, table: str) -> list[tuple[Any, ...]]:
     return [tuple(r) for r in conn.execute(query).fetchall()]
 
 
-def _every_view(conn: Conn) -> list[tuple[str, int | None]]:
-    """(version, revision) of every working set (revision None) and every revision a version can look at."""
-    views: list[tuple[str, int | None]] = [
-        (r[0], None) for r in conn.execute("SELECT name FROM tgsis.versions ORDER BY versionid").fetchall()
-    ]
-    views += [
-        (r[0], int(r[1]))
-        for r in conn.execute(
-            "SELECT v.name, r.revision FROM tgsis.versions v JOIN tgsis.revisions r "
-            "ON (r.revision = ANY (v.workingset) OR r.versionid = v.versionid) AND r.visibleset IS NOT NULL "
-            "ORDER BY 1, 2"
-        ).fetchall()
-    ]
-    return views
-
-
 def _compare_every_view(conn: Conn, tables: Iterable[str] = MODEL1) -> int:
     """Assert that rows and chunks show the same under every view; return the number of (view, table) compared.
 
     The session moves with SET LOCAL (``p_local``): nothing is committed, the caller's transaction goes on.
     """
     compared = 0
-    for version, revision in _every_view(conn):
+    for version, revision in every_view(conn):
         if revision is None:
             conn.execute("SELECT tgsis.goto_version(%s, true)", (version,))
         else:
@@ -204,66 +188,8 @@ def test_unversioned_rows_become_one_chunk_version_each_with_holes_and_back(conn
 # --------------------------------------------------------------------------- versioned history
 
 
-def _history(conn: Conn, geoid: int) -> None:
-    """Rows with real revisions and lastrevs, through the public API only (on top of make_fault: DEFAULT, e1)."""
-    move(conn, "e1", geoid, [0, 1, 2, 50], (1.5, -2.25, 0.125))
-    tgsis.save_revision(conn, "e1 first")
-    conn.commit()
-    move(conn, "e1", geoid, [3, 50, 143], (0.0, 0.0, -7.0))
-    tgsis.create_version(conn, "e2", "e1")
-    conn.commit()
-    move(conn, "e2", geoid, [10, 11], (3.0, 3.0, 3.0))
-    # a deletion of vertices and triangles: the last row of the grid goes in a check-in by difference
-    with tgsis.in_version(conn, "e2"):
-        state = F.fetch_feature(conn, "faults", geoid).mesh
-        assert isinstance(state, Surface)
-        keep = np.arange(state.n_vertices - 12)
-        inside = np.all(state.cells < len(keep), axis=1)
-        smaller = Surface(
-            state.vertices[keep],
-            state.cells[inside],
-            vertex_properties={k: v[keep] for k, v in state.vertex_properties.items()},
-            cell_properties={k: v[inside] for k, v in state.cell_properties.items()},
-        )
-        tgsis.save_feature(conn, "faults", geoid, smaller)
-        conn.commit()
-    # another object, inserted then deleted in e1's history
-    with tgsis.in_version(conn, "e1"):
-        triangle = Surface(
-            np.eye(3) * 4.0,
-            np.array([[0, 1, 2]]),
-            vertex_properties={"porosity": np.array([0.1, 0.2, 0.3])},
-            cell_properties={"facies": np.array([2], dtype=np.int32)},
-        )
-        other = F.insert_feature(conn, "faults", triangle)
-        conn.commit()
-    tgsis.goto_version(conn, "e1")
-    tgsis.save_revision(conn, "with other")
-    conn.commit()
-    with tgsis.in_version(conn, "e1"):
-        move(conn, "e1", other, [1], (0.5, 0.5, 0.5))
-        assert F.delete_feature(conn, "faults", other)
-        conn.commit()
-    tgsis.goto_version(conn, "DEFAULT")
-    conn.commit()
-    # a merge into the parent (e2 -> e1), and e1 -> DEFAULT
-    tgsis.merge_version(conn, "e2")
-    conn.commit()
-    tgsis.merge_version(conn, "e1")
-    conn.commit()
-    move(conn, "e2", geoid, [20], (1.0, 0.0, 0.0))
-    # a version that deletes the whole object
-    tgsis.create_version(conn, "gone")
-    conn.commit()
-    with tgsis.in_version(conn, "gone"):
-        assert F.delete_feature(conn, "faults", geoid)
-        conn.commit()
-    move(conn, "DEFAULT", geoid, [30, 31], (0.0, -1.0, 0.0))
-    conn.commit()
-
-
 def test_versioned_history_every_version_and_revision_sees_the_same(conn: Conn, fault_clone: int) -> None:
-    _history(conn, fault_clone)
+    varied_history(conn, fault_clone)
     closed = conn.execute(
         "SELECT count(*) FILTER (WHERE revclosed), count(DISTINCT revision) FROM tgsis.vrtx_ver"
     ).fetchone()

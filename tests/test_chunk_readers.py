@@ -59,7 +59,9 @@ def _load(conn: Conn) -> dict[str, int]:
             solids,
             TetraMesh([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 1]], [[0, 1, 2, 3], [1, 2, 3, 4]]),
         ),
-        "line": F.insert_feature(conn, lines, LineSet([[0, 0, 0], [1, 2, 3], [4, 5, -0.0]], [[0, 1], [1, 2]])),
+        "line": F.insert_feature(
+            conn, lines, LineSet(np.array([[0, 0, 0], [1, 2, 3], [4, 5, -0.0]]), [[0, 1], [1, 2]])
+        ),
         "points": F.insert_feature(conn, points, PointSet([[0, 0, 0], [1, 1, 1], [2, 2, 2]])),
     }
     conn.commit()

@@ -24,8 +24,19 @@ from psycopg import sql
 import tgsis
 import tgsis.db._chunk_transfer as transfer
 from tests.roles import login_roles
-from tgsis.db._chunk_transfer import ObjectRows, download_chunks, download_tables, split_copy, upload_chunks
-from tgsis.db._transfer import Storage
+from tgsis._chunks import from_copy
+from tgsis.db._chunk_transfer import (
+    ObjectRows,
+    PackedChunks,
+    chunk_table,
+    download_chunks,
+    download_tables,
+    records_as_copy,
+    rows_request,
+    split_copy,
+    upload_chunks,
+)
+from tgsis.db._transfer import Packed, Storage, columns_out_all
 from tgsis.errors import AlreadyExistsError, InvalidInputError, NotFoundError, NotVersionedError
 from tgsis.mesh import Surface
 
@@ -33,8 +44,10 @@ Conn = psycopg.Connection[Any]
 
 
 def make_chunks(conn: Conn, tables: Iterable[str] = ("vrtx", "trgl")) -> None:
+    """The chunk tables beside the rows; made by the storage switch already when the tables are stored in chunks."""
     for table in tables:
-        conn.execute("SELECT tgsis.create_chunk_table(%s), tgsis.create_chunk_view(%s)", (table, table))
+        if conn.execute("SELECT tgsis.stored_in_chunks(%s)", (table,)).fetchone() != (True,):
+            conn.execute("SELECT tgsis.create_chunk_table(%s), tgsis.create_chunk_view(%s)", (table, table))
     conn.commit()
 
 
@@ -207,8 +220,8 @@ def test_upload_refuses_an_object_that_has_chunks_and_bad_input(conn: Conn) -> N
         upload_chunks(conn, "vrtx", [vertices(8, [1, 1])])
     with pytest.raises(InvalidInputError):
         upload_chunks(conn, "vrtx", [ObjectRows(8, np.arange(2), {"x": np.zeros(2), "y": np.zeros(2)})])
-    with pytest.raises(NotFoundError):
-        upload_chunks(conn, "segment", [ObjectRows(8, np.arange(1), {"vrtxid1": np.zeros(1, np.int64)})])
+    with pytest.raises(NotFoundError):  # atoms stay rows
+        upload_chunks(conn, "atom", [ObjectRows(8, np.arange(1), {"refid": np.zeros(1, np.int64)})])
     with pytest.raises(NotFoundError):
         download_chunks(conn, "atom", [7])
     conn.rollback()
@@ -289,6 +302,68 @@ def test_a_child_downloads_its_change_the_parent_its_content(conn: Conn) -> None
     assert len(download_chunks(conn, "vrtx", [11])[11].ids) == 2500
 
 
+def test_packed_chunks_read_what_download_reads_in_one_query_with_rows(conn: Conn) -> None:
+    """PackedChunks, the chunk tables' part of columns_out_all (fetch_feature's one query): the child's and the
+    parent's content as download_tables gives it, several objects (one without chunks), beside a Packed part."""
+    tgsis.enable_feature_versioning(conn)
+    make_chunks(conn, ["vrtx"])
+    base = vertices(11, np.arange(2500), seed=5)
+    upload_chunks(conn, "vrtx", [base, vertices(12, np.arange(10), seed=6)])
+    conn.commit()
+    tgsis.create_version(conn, "child")
+    tgsis.goto_version(conn, "child")
+    write_rows(conn, "vrtx", [(11, 1500, 7.0, 8.0, 9.0), (11, 3000, 1.0, 2.0, 3.0)], [(11, 2)])
+    conn.commit()
+    columns = [("vrtxid", "int8"), ("z", "float8"), ("x", "float8")]  # any order of the arrays
+    for version in ("child", "DEFAULT"):
+        tgsis.goto_version(conn, version)
+        want = download_tables(conn, {"vrtx": [11, 12, 99]})["vrtx"]
+        one, packed = columns_out_all(
+            conn,
+            [
+                PackedChunks(chunk_table(conn, "vrtx"), [12, 11, 99], ["vrtxid", "z", "x"]),
+                Packed(sql.SQL("tgsis.geometry"), "geoid", [("nvrtx", "int8")], [11]),
+            ],
+        )
+        assert len(packed[0]) == 0  # no geometry rows: the Packed part answers beside it, empty
+        for geoid in (11, 12):
+            mine = one[0] == geoid
+            order = np.argsort(one[1][mine])
+            assert np.array_equal(one[1][mine][order], want[geoid].ids)
+            for k, (name, _) in enumerate(columns[1:]):
+                assert_same_bits(one[2 + k][mine][order], want[geoid].columns[name])
+        assert 99 not in set(one[0].tolist())
+        single = columns_out_all(conn, [rows_request(conn, "vrtx", columns, [11], frozenset({"vrtx"}))])[0]
+        assert np.array_equal(np.sort(single[1]), want[11].ids)
+
+
+def assert_same_bits(got: npt.NDArray[Any], want: npt.NDArray[Any]) -> None:
+    assert got.dtype == want.dtype and np.array_equal(got.view(np.int64), want.view(np.int64))
+
+
+def test_records_as_copy_refuses_cut_or_padded_records(conn: Conn) -> None:
+    make_chunks(conn, ["vrtx"])
+    upload_chunks(conn, "vrtx", [vertices(5, np.arange(1500), seed=2)])
+    layout = chunk_table(conn, "vrtx")
+    fields = sql.SQL(", ").join(sql.Identifier(c) for c in layout.columns.select_columns())
+    with conn.cursor(binary=True) as cursor:
+        count, data = cursor.execute(
+            sql.SQL(
+                "SELECT count(*), string_agg(record_send(ROW({})), ''::bytea) FROM tgsis.vrtx_chunk WHERE geoid = 5"
+            ).format(fields)
+        ).fetchone()  # type: ignore[misc]
+    data = bytes(data)
+    got = from_copy(records_as_copy(data, count), layout.columns)
+    assert_same(ObjectRows(5, *got.rows()), vertices(5, np.arange(1500), seed=2))
+    with pytest.raises(InvalidInputError, match="end inside a record"):
+        records_as_copy(data[:-3], count)
+    with pytest.raises(InvalidInputError, match="bytes after"):
+        records_as_copy(data + b"\x00", count)
+    with pytest.raises(InvalidInputError):
+        records_as_copy(data, count + 1)
+    conn.rollback()
+
+
 def test_two_uploads_of_one_new_object_one_is_refused(db_dsn: str, conn: Conn) -> None:
     """The second waits for the first's chunk keys, then is refused by name: the object has its chunks."""
     make_chunks(conn, ["vrtx"])
@@ -340,6 +415,9 @@ def test_roles_read_and_write_with_their_own_rights(db_dsn: str, conn: Conn) -> 
     conn.execute("REVOKE ALL ON beta FROM tgsis_reader, tgsis_editor, tgsis_admin, PUBLIC")
     conn.commit()
     make_chunks(conn)
+    # the features' own chunks (written by insert_feature once the tables are stored in chunks) make way
+    conn.execute("DELETE FROM tgsis.vrtx_chunk")
+    conn.execute("DELETE FROM tgsis.trgl_chunk")
     upload_chunks(conn, "vrtx", [vertices(alpha, range(10)), vertices(beta, range(4))])
     conn.commit()
     with login_roles(db_dsn, {"reader": "tgsis_reader", "editor": "tgsis_editor"}) as roles:

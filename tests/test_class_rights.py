@@ -31,6 +31,7 @@ from tests.temporal_data import evolving, series
 from tgsis import gmaps
 from tgsis.datamodels import TimeModel
 from tgsis.db import features as F
+from tgsis.db._chunk_transfer import ObjectRows, chunked_tables, upload_chunks
 from tgsis.db._transfer import Storage
 
 Conn = psycopg.Connection[Any]
@@ -156,8 +157,10 @@ def test_a_child_version_hides_the_class_too(world: World) -> None:
     assert _count(editor, "vrtx", world.beta) == 0
     assert _count(editor, "trgl", world.beta) == 0
     assert _count(editor, "vrtx", world.alpha) == 25
-    # nor the storage of every revision
-    assert editor.execute("SELECT count(*) FROM tgsis.vrtx_ver WHERE geoid = %s", (world.beta,)).fetchone() == (0,)
+    # nor the storage of every revision (rows, or chunks)
+    stored = editor.execute("SELECT tgsis.storage_table('tgsis', 'vrtx')").fetchone()
+    assert stored is not None
+    assert editor.execute(f"SELECT count(*) FROM {stored[0]} WHERE geoid = %s", (world.beta,)).fetchone() == (0,)
     editor.rollback()
 
 
@@ -249,18 +252,27 @@ def test_upload_into_a_revoked_class_is_refused(world: World) -> None:
     before = _rows(world.su, world.beta)
     with pytest.raises(psycopg.errors.InsufficientPrivilege), editor.transaction():
         storage = Storage.of(editor)
-        storage.copy(
-            editor,
-            "tgsis",
-            "vrtx",
-            [
-                ("geoid", np.full(3, world.beta, dtype=np.int64), "int8"),
-                ("vrtxid", np.arange(100, 103, dtype=np.int64), "int8"),
-                ("x", np.zeros(3), "float8"),
-                ("y", np.zeros(3), "float8"),
-                ("z", np.zeros(3), "float8"),
-            ],
-        )
+        if "vrtx" in chunked_tables(editor):  # the chunk upload (binary COPY of chunks, staged the same way)
+            zeros = {name: np.zeros(3) for name in ("x", "y", "z")}
+            upload_chunks(editor, "vrtx", [ObjectRows(world.beta, np.arange(1100, 1103, dtype=np.int64), zeros)])
+        else:
+            storage.copy(
+                editor,
+                "tgsis",
+                "vrtx",
+                [
+                    ("geoid", np.full(3, world.beta, dtype=np.int64), "int8"),
+                    ("vrtxid", np.arange(100, 103, dtype=np.int64), "int8"),
+                    ("x", np.zeros(3), "float8"),
+                    ("y", np.zeros(3), "float8"),
+                    ("z", np.zeros(3), "float8"),
+                ],
+            )
+    assert _rows(world.su, world.beta) == before
+    # nor a new feature of the class, its definition given (so that no catalog read refuses first)
+    with pytest.raises((tgsis.MissingPrivilegeError, psycopg.errors.InsufficientPrivilege)):
+        F.insert_feature(editor, F.get_feature_class(world.su, "beta"), flat_grid(4, 3.0))
+    editor.rollback()
     assert _rows(world.su, world.beta) == before
 
 

@@ -130,6 +130,16 @@ def tree(conn: Conn) -> dict[str, Any]:
 # --------------------------------------------------------------------------- helpers
 
 
+def _storage(conn: Conn, schema: str, table: str) -> sql.Composable:
+    """The relation storing a versioned table's row versions (``tgsis.storage_table``: ``_ver`` or chunks)."""
+    return sql.SQL(str(_one(conn, "SELECT tgsis.storage_table(%s, %s)", (schema, table))))
+
+
+def _first_vertex(conn: Conn) -> str:
+    """The condition naming vertex 0 of an object in the vertices' storage: its row, or its chunk (chunk 0)."""
+    return "chunk = 0" if _one(conn, "SELECT tgsis.stored_in_chunks('vrtx')") else "vrtxid = 0"
+
+
 def _tables(conn: Conn) -> list[tuple[str, str]]:
     return [
         (r[0], r[1])
@@ -173,10 +183,10 @@ def _snapshot(conn: Conn) -> Snapshot:
 
 
 def _raw(conn: Conn) -> dict[str, list[tuple[Any, ...]]]:
-    """Every stored row of the _ver tables and of the version catalog."""
+    """Every stored row (or chunk) version of the versioned tables' storage and of the version catalog."""
     raw = {
         f"{s}.{t}_ver": conn.execute(
-            sql.SQL("SELECT * FROM {} ORDER BY 1, 2, revision").format(sql.Identifier(s, t + "_ver"))
+            sql.SQL("SELECT * FROM {} ORDER BY 1, 2, revision").format(_storage(conn, s, t))
         ).fetchall()
         for s, t in _tables(conn)
     }
@@ -235,7 +245,7 @@ def _expected_report(conn: Conn) -> Counter[tuple[str, str]]:
     still_used: set[int] = set()
     for s, t in _tables(conn):
         for revision, lastrevs in conn.execute(
-            sql.SQL("SELECT revision, lastrevs FROM {}").format(sql.Identifier(s, t + "_ver"))
+            sql.SQL("SELECT revision, lastrevs FROM {}").format(_storage(conn, s, t))
         ).fetchall():
             closed = set(lastrevs)
             if not closed & checked and not any(revision in S and not closed & S for S in sets):
@@ -294,9 +304,10 @@ def test_compress_keeps_what_every_version_and_kept_revision_sees(conn: Conn, tr
 
 def test_a_revision_whose_rows_were_all_superseded_goes_with_its_rows(conn: Conn, tree: dict[str, Any]) -> None:
     superseded = tree["superseded"]
+    vertices = _one(conn, "SELECT tgsis.storage_table('tgsis', 'vrtx')")  # (one row or chunk per object written)
     count = (
         "SELECT (SELECT count(*) FROM wells_ver WHERE revision = %(r)s), "
-        "       (SELECT count(*) FROM tgsis.vrtx_ver WHERE revision = %(r)s)"
+        f"       (SELECT count(*) FROM {vertices} WHERE revision = %(r)s)"
     )
     assert conn.execute(count, {"r": superseded}).fetchone() == (1, 1)
     tgsis.goto_revision(conn, "DEFAULT", superseded)  # viewable before
@@ -316,8 +327,9 @@ def test_a_revision_whose_rows_were_all_superseded_goes_with_its_rows(conn: Conn
 def test_merged_away_revisions_go_unless_a_child_reads_them(conn: Conn, tree: dict[str, Any]) -> None:
     side, edit = tree["side_merged"], tree["edit_merged"]
     a, c = tree["ids"]["A"], tree["ids"]["C"]
-    written = "SELECT count(*) FROM tgsis.vrtx_ver WHERE revision = %s"
-    lastrevs = "SELECT lastrevs FROM tgsis.vrtx_ver WHERE geoid = %s AND vrtxid = 0 AND revision = 0"
+    vertices = _one(conn, "SELECT tgsis.storage_table('tgsis', 'vrtx')")  # (one row or chunk per object written)
+    written = f"SELECT count(*) FROM {vertices} WHERE revision = %s"
+    lastrevs = f"SELECT lastrevs FROM {vertices} WHERE geoid = %s AND {_first_vertex(conn)} AND revision = 0"
     assert (_one(conn, written, (side,)), _one(conn, written, (edit,))) == (2, 1)
     assert side in _one(conn, lastrevs, (a,)) and side in _one(conn, lastrevs, (c,))
     tgsis.compress_versions(conn)

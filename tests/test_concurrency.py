@@ -490,9 +490,11 @@ def invariant_problems(conn: Conn) -> list[str]:
             "GROUP BY 1, 2 HAVING count(*) > 1"
         )
     ]
-    tables = q("SELECT schemaname, tablename || '_ver', keycolumns FROM tgsis.versioned_tables").fetchall()
-    for schema, table, keys in tables:
-        ver = f'"{schema}"."{table}"'
+    # each table's storage (<table>_ver, or a model table's chunk versions keyed by (geoid, chunk))
+    tables = q(
+        "SELECT tgsis.storage_table(t.schemaname, t.tablename), tgsis.storage_key(t) FROM tgsis.versioned_tables t"
+    )
+    for ver, keys in tables.fetchall():
         for what, n in q(
             f"SELECT 'unknown revision', count(*) FROM {ver} v "
             f" WHERE NOT EXISTS (SELECT FROM tgsis.revisions r WHERE r.revision = v.revision) UNION ALL "
@@ -1102,7 +1104,9 @@ def test_a_second_merge_of_the_same_version_waits_and_then_finds_nothing_to_merg
         "SELECT workingset[cardinality(workingset) - 1] FROM tgsis.versions WHERE versionid = 0"
     ).fetchone()
     assert second_target is not None
-    for table in ("items_ver", "tgsis.vrtx_ver", "tgsis.geometry_ver", "horizons_ver"):
+    vertices = small.execute("SELECT tgsis.storage_table('tgsis', 'vrtx')").fetchone()
+    assert vertices is not None
+    for table in ("items_ver", str(vertices[0]), "tgsis.geometry_ver", "horizons_ver"):
         assert small.execute(
             f"SELECT count(*) FROM {table} WHERE revision = %s OR %s = ANY (lastrevs)",
             (second_target[0], second_target[0]),

@@ -38,10 +38,28 @@ def horizons(conn: Conn) -> F.FeatureClass:
     return fc
 
 
+def _stored(conn: Conn, table: str, schema: str = "tgsis") -> str:
+    """The relation storing a table's rows (``tgsis.storage_table``): ``<t>_ver``, or ``<t>_chunk`` in chunks."""
+    return str(conn.execute("SELECT tgsis.storage_table(%s, %s)", (schema, table)).fetchone()[0])  # type: ignore[index]
+
+
+def _decoded(conn: Conn, table: str) -> str:
+    """A relation of the stored versions of a model table's rows, one row each: ``<t>_ver`` or ``<t>_chunk_rows``."""
+    row = conn.execute(
+        "SELECT CASE WHEN tgsis.stored_in_chunks(%s) THEN format('tgsis.%%I', %s || '_chunk_rows') "
+        "ELSE tgsis.storage_table('tgsis', %s) END",
+        (table, table, table),
+    ).fetchone()
+    assert row is not None
+    return str(row[0])
+
+
 def _rows(conn: Conn) -> dict[str, int]:
+    """Stored rows (of a table stored in chunks: chunk versions) of the tables a feature of the class has."""
+    tables = [("tgsis", "geometry"), ("tgsis", "vrtx"), ("tgsis", "trgl"), ("public", "horizons")]
     return {
-        t: int(conn.execute(f"SELECT count(*) FROM {t}").fetchone()[0])  # type: ignore[index]
-        for t in ("tgsis.geometry_ver", "tgsis.vrtx_ver", "tgsis.trgl_ver", "horizons_ver", "horizons_cellpros_ver")
+        f"{schema}.{t}": int(conn.execute(f"SELECT count(*) FROM {_stored(conn, t, schema)}").fetchone()[0])  # type: ignore[index]
+        for schema, t in [*tables, ("public", "horizons_cellpros")]
     }
 
 
@@ -103,9 +121,9 @@ def test_surface_edited_in_a_child_is_invisible_in_default(conn: Conn, horizons:
         edited = F.fetch_feature(conn, horizons, fid)
     assert _rows(conn) == {
         **before,
-        "tgsis.vrtx_ver": before["tgsis.vrtx_ver"] + 1,
-        "horizons_ver": before["horizons_ver"] + 1,
-    }  # one row each, not 100,000
+        "tgsis.vrtx": before["tgsis.vrtx"] + 1,
+        "public.horizons": before["public.horizons"] + 1,
+    }  # one row (or chunk) each, not 100,000
     assert edited.properties == {"creator": "bob"} and isinstance(edited.mesh, tgsis.Mesh)
     assert edited.mesh.vertices[42, 2] == 5 and np.count_nonzero(edited.mesh.vertices != base.vertices) == 1
     default = F.fetch_feature(conn, horizons, fid)
@@ -125,9 +143,12 @@ def test_upload_and_delete_inside_a_version(conn: Conn, horizons: F.FeatureClass
     assert [f.id for f in F.fetch_features(conn, horizons)] == [kept]
     assert F.features_in_box(conn, horizons, [[-1, -1, 1.5], [10, 10, 2.5]]) == []
     # the child's rows were copied in by COPY with its working revision, not through triggers
-    assert conn.execute("SELECT DISTINCT revision FROM tgsis.vrtx_ver WHERE geoid = %s", (new,)).fetchall() == [(2,)]
+    for table in ("vrtx", "trgl"):
+        assert conn.execute(
+            f"SELECT DISTINCT revision FROM {_stored(conn, table)} WHERE geoid = %s", (new,)
+        ).fetchall() == [(2,)]
     assert conn.execute(
-        "SELECT count(*) FROM tgsis.vrtx_ver WHERE geoid = %s AND lastrevs = '{2}'", (kept,)
+        f"SELECT count(*) FROM {_decoded(conn, 'vrtx')} WHERE geoid = %s AND lastrevs = '{{2}}'", (kept,)
     ).fetchone() == (25,)
 
 
@@ -153,7 +174,7 @@ def test_drop_class_removes_its_features_from_every_version(conn: Conn, horizons
     with pytest.raises(tgsis.InUseError, match="still has 2 feature"):
         F.drop_feature_class(conn, "horizons")
     assert F.drop_feature_class(conn, "horizons", force=True) == 2
-    assert conn.execute("SELECT count(*) FROM tgsis.vrtx_ver").fetchone() == (0,)
+    assert conn.execute(f"SELECT count(*) FROM {_stored(conn, 'vrtx')}").fetchone() == (0,)
     assert conn.execute("SELECT count(*) FROM tgsis.versioned_tables WHERE tablename LIKE 'horizons%'").fetchone() == (
         0,
     )

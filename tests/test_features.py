@@ -345,3 +345,34 @@ def test_refresh_and_check_after_plain_sql_edits(conn: Conn, horizons: F.Feature
     assert conn.execute("SELECT * FROM tgsis.check_geometry(%s)", (fid,)).fetchall() == []
     with pytest.raises(psycopg.Error, match="geometry 123456 does not exist"):
         conn.execute("SELECT tgsis.refresh_geometry(123456)")
+
+
+def test_upload_writes_the_storage_itself(conn: Conn, horizons: F.FeatureClass) -> None:
+    """Rows by COPY into the table, or (stored in chunks) chunks by COPY into tgsis.<t>_chunk: never row by row
+    through the face's INSTEAD OF triggers, which rewrite a chunk per row (before the storage switch's upload:
+    2,500 updates of 3 chunks)."""
+    mesh = _horizon(50)  # 2,500 vertices: 3 chunks; 4,802 triangles: 5 chunks
+    with conn.transaction():
+        F.insert_feature(conn, horizons, mesh)
+        for table, rows in (("vrtx", mesh.n_vertices), ("trgl", mesh.n_cells)):
+            stored, chunked = conn.execute(
+                "SELECT tgsis.storage_table('tgsis', %s), tgsis.stored_in_chunks(%s)", (table, table)
+            ).fetchone()  # type: ignore[misc]
+            written = conn.execute(
+                "SELECT n_tup_ins, n_tup_upd + n_tup_del FROM pg_stat_xact_user_tables WHERE relid = %s::regclass",
+                (stored,),
+            ).fetchone()
+            assert written == ((rows + 1023) // 1024 if chunked else rows, 0), table
+    back = F.fetch_features(conn, horizons)[0].mesh
+    assert back is not None and back.same_as(mesh)
+
+
+def test_a_mesh_changed_into_a_degenerate_one_is_refused_by_name(conn: Conn, horizons: F.FeatureClass) -> None:
+    """Cells naming a vertex twice (a mesh's cells changed after it was checked): the row table's CHECK refused
+    them with a raw 23514, the chunk table has no such CHECK; both are refused by the client, naming the cell."""
+    mesh = _horizon()
+    mesh.cells[3] = [2, 5, 2]
+    before = _counts(conn)
+    with pytest.raises(tgsis.InvalidGeometryError, match=r"triangle 3 uses a vertex twice: \[2, 5, 2\]"):
+        F.insert_feature(conn, horizons, mesh)
+    assert _counts(conn) == before

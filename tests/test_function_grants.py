@@ -174,6 +174,7 @@ _NAMED_IN_DOCS = frozenset(
         "vertex",
         "vertices",
         "vertices_at",
+        "write_object_rows",
         "write_revision",
     }
 )

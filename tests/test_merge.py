@@ -44,9 +44,18 @@ def _set_z(conn: Conn, version: str, geoid: int, vertex: int, z: float) -> None:
         conn.commit()
 
 
+def _storage(conn: Conn, table: str) -> str:
+    """The relation storing a model table's row versions: ``tgsis.<table>_ver``, or its chunk versions."""
+    row = conn.execute("SELECT tgsis.storage_table('tgsis', %s)", (table,)).fetchone()
+    assert row is not None
+    return str(row[0])
+
+
 def _rows(conn: Conn, geoid: int) -> list[tuple[Any, ...]]:
-    """Every stored row version of an object (to show what a merge did not touch)."""
-    return conn.execute("SELECT * FROM tgsis.vrtx_ver WHERE geoid = %s ORDER BY vrtxid, revision", (geoid,)).fetchall()
+    """Every stored row (or chunk) version of an object (to show what a merge did not touch)."""
+    return conn.execute(
+        f"SELECT * FROM {_storage(conn, 'vrtx')} WHERE geoid = %s ORDER BY 2, revision", (geoid,)
+    ).fetchall()
 
 
 def _edit_both(conn: Conn, ids: dict[str, int]) -> None:
@@ -92,9 +101,10 @@ def test_each_solution_gives_the_expected_parent(conn: Conn, story: dict[str, in
 
 def test_unchanged_rows_are_not_copied_and_the_version_goes_on(conn: Conn, story: dict[str, int]) -> None:
     _set_z(conn, "e1", story["A"], 3, 7.0)
-    before = conn.execute("SELECT count(*) FROM tgsis.vrtx_ver").fetchone()
-    assert tgsis.merge_version(conn, "e1") == 2  # one row closed, one copied: not 25
-    after = conn.execute("SELECT count(*) FROM tgsis.vrtx_ver").fetchone()
+    vertices = _storage(conn, "vrtx")
+    before = conn.execute(f"SELECT count(*) FROM {vertices}").fetchone()
+    assert tgsis.merge_version(conn, "e1") == 2  # one row (or chunk) closed, one copied: not 25
+    after = conn.execute(f"SELECT count(*) FROM {vertices}").fetchone()
     assert before is not None and after is not None and after[0] == before[0] + 1
     _set_z(conn, "e1", story["A"], 4, 8.0)  # go on working; merge again
     assert tgsis.find_conflicts(conn, "e1") == []
@@ -170,15 +180,20 @@ def test_killing_the_backend_mid_merge_leaves_both_sides_as_they_were(
 ) -> None:
     with tgsis.in_version(conn, "e1"):
         conn.execute("UPDATE tgsis.vrtx SET z = z + 1 WHERE geoid = %s", (story["A"],))
-        conn.execute("UPDATE tgsis.trgl SET vrtxid1 = vrtxid1 WHERE geoid = %s", (story["A"],))
+        # (the same triangles, their corners rotated: new content, which storage in chunks writes too)
+        conn.execute(
+            "UPDATE tgsis.trgl SET vrtxid1 = vrtxid2, vrtxid2 = vrtxid3, vrtxid3 = vrtxid1 WHERE geoid = %s",
+            (story["A"],),
+        )
         conn.commit()
     # a pause inside the merge, after the vertices are written and while the triangles are
     conn.execute("""CREATE FUNCTION pause() RETURNS trigger LANGUAGE plpgsql AS
                     $$ BEGIN PERFORM pg_sleep(30); RETURN NULL; END $$""")
-    conn.execute("CREATE TRIGGER pause AFTER INSERT ON tgsis.trgl_ver FOR EACH STATEMENT EXECUTE FUNCTION pause()")
+    storages = (_storage(conn, "vrtx"), _storage(conn, "trgl"))
+    conn.execute(f"CREATE TRIGGER pause AFTER INSERT ON {storages[1]} FOR EACH STATEMENT EXECUTE FUNCTION pause()")
     conn.commit()
     snapshot = "SELECT * FROM {} ORDER BY 1, 2, revision"
-    before = {t: conn.execute(snapshot.format(t)).fetchall() for t in ("tgsis.vrtx_ver", "tgsis.trgl_ver")}
+    before = {t: conn.execute(snapshot.format(t)).fetchall() for t in storages}
     versions = conn.execute("SELECT * FROM tgsis.versions ORDER BY versionid").fetchall()
     conn.commit()
 

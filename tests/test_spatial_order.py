@@ -16,6 +16,7 @@ import numpy as np
 import psycopg
 import pytest
 
+import tgsis
 from tgsis import formats, gmaps
 from tgsis.cli import main
 from tgsis.db import features as F
@@ -301,6 +302,18 @@ def test_import_order_option(db_dsn: str, tmp_path: Path, capsys: pytest.Capture
     args = ["import", str(path), "--class", "faults", "--name", "file", "--replace", "--order", "spatial"]
     assert main(["--dsn", db_dsn, *args]) == 1
     assert "--order spatial does not go with --replace" in capsys.readouterr().err
+    # a replace of the spatially ordered feature by its file keeps its ids, so it keeps saying they are spatial
+    moved = read.vertices.copy()
+    moved[3] += 1.5
+    edited = type(read)(moved, read.cells, cell_properties=read.cell_properties, metadata=read.metadata)
+    formats.write(edited, path)
+    args = ["import", str(path), "--class", "faults", "--name", "spatial", "--replace"]
+    assert main(["--dsn", db_dsn, *args]) == 0
+    with psycopg.connect(db_dsn) as conn:
+        replaced = F.fetch_feature(conn, "faults", ids["spatial"]).mesh
+    assert isinstance(replaced, tgsis.Surface)
+    assert replaced.metadata["vertex_order"] == "spatial"
+    assert sorted(map(tuple, replaced.vertices.tolist())) == sorted(map(tuple, edited.vertices.tolist()))
     # refused: a model-2 instant, and an unknown order (argparse)
     assert main(["--dsn", db_dsn, "class", "create", "tops", "--geotype", "SURFACE", "--time-model", "INSTANTS"]) == 0
     capsys.readouterr()

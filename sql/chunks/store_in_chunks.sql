@@ -18,7 +18,7 @@
 --    visibility at each read.
 -- Views of the users' own over the table block the drop (PostgreSQL names
 -- them, nothing changes). Refused by name: a table not registered for chunks
--- (TG200), one stored in chunks already (TG201). Returns the chunk versions
+-- (TG200), one stored in chunks already (TG201), partitioned storage (TG100). Returns the chunk versions
 -- written. Internal (tgsis's owner: it creates and drops the storage).
 CREATE FUNCTION tgsis.store_in_chunks(p_table text)
 RETURNS bigint
@@ -45,6 +45,13 @@ BEGIN
             USING ERRCODE = 'TG201', DETAIL = 'The storage switch needs these names for the row definition and the new face.';
     END IF;
     v_storage := tgsis.storage_table('tgsis', p_table)::regclass;
+    -- a chunk table is made plain: switching partitioned storage would undo the DBA's partitioning silently
+    IF (SELECT c.relkind FROM pg_class c WHERE c.oid = v_storage) = 'p' THEN
+        RAISE EXCEPTION '% is partitioned (tgsis.partition_model_storage), and its chunks would not be', v_storage
+            USING ERRCODE = 'TG100',
+                  DETAIL = 'The chunk table of a partitioned storage is not partitioned yet (docs/storage.md, "The storage switch").',
+                  HINT = 'keep this table stored as rows';
+    END IF;
     SELECT * INTO v_versioned FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table;
 
     -- 1. the chunks, verified against every set

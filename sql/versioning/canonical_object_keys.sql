@@ -27,10 +27,10 @@ BEGIN
     END IF;
     FOR v_t IN
         SELECT DISTINCT ON (a.atttypid) t.schemaname, t.tablename, t.objectkeyfield, a.atttypid AS keytype,
-               format('%I.%I', t.schemaname, t.tablename || '_ver')::regclass AS storage
+               tgsis.storage_table(t.schemaname, t.tablename)::regclass AS storage
           FROM tgsis.versioned_tables t
           JOIN pg_catalog.pg_attribute a
-            ON a.attrelid = format('%I.%I', t.schemaname, t.tablename || '_ver')::regclass
+            ON a.attrelid = tgsis.storage_table(t.schemaname, t.tablename)::regclass
            AND a.attname = t.objectkeyfield AND NOT a.attisdropped
          WHERE t.objectclass = p_objectclass
          ORDER BY a.atttypid, t.schemaname, t.tablename

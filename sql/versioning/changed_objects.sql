@@ -47,12 +47,13 @@ BEGIN
         -- owner may have created); read as the storage's owner from definer code
         RETURN QUERY SELECT v_t.objectclass, r[1], v_t.shortname, r[2] FROM tgsis.storage_run(v_t, false, format(
             'SELECT ARRAY[%s, md5(string_agg(pg_catalog.record_out(v.*)::text, ''|'' ORDER BY %s, v.revision))]
-               FROM %I.%I v
+               FROM %s v
               WHERE %s
               GROUP BY v.%I',
             tgsis.object_key_text_sql(v_t, 'v'),  -- the key's canonical text
-            (SELECT string_agg(format('v.%I', k), ', ' ORDER BY o) FROM unnest(v_t.keycolumns) WITH ORDINALITY AS u(k, o)),
-            v_t.schemaname, v_t.tablename || '_ver', v_where, v_t.objectkeyfield), p_1 => v_keys, p_2 => p_revisions) AS r;
+            -- (stored versions in the storage's key order: the row key, or (geoid, chunk) for chunk versions)
+            (SELECT string_agg(format('v.%I', k), ', ' ORDER BY o) FROM unnest(tgsis.storage_key(v_t)) WITH ORDINALITY AS u(k, o)),
+            tgsis.storage_table(v_t.schemaname, v_t.tablename), v_where, v_t.objectkeyfield), p_1 => v_keys, p_2 => p_revisions) AS r;
     END LOOP;
 END
 $$;

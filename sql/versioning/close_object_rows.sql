@@ -30,8 +30,18 @@ DECLARE
     v_where   text;
     v_none    bigint[];
     v_gone    bigint := 0;
+    v_storage text := tgsis.storage_table(p_schema, p_table);  -- <table>_ver, or tgsis.<table>_chunk
 BEGIN
     PERFORM tgsis.require_read_committed('a set-based delete of versioned objects');
+    -- a chunk holds 1024 ids of an object: some of its rows go by rewriting it, which is the chunk writer's
+    -- work (tgsis.write_chunk_rows, a later layer); here whole objects only, never a chunk dropped for a row
+    IF p_idfield IS NOT NULL AND p_schema = 'tgsis' AND tgsis.stored_in_chunks(p_table) THEN
+        RAISE EXCEPTION 'tgsis.% is stored in chunks: some rows of an object are deleted by rewriting its chunks', quote_ident(p_table)
+            USING ERRCODE = 'TG100',
+                  DETAIL = format('Rows %s = any of %s of objects %s were to be deleted; tgsis.close_object_rows deletes whole objects '
+                                  'of a table stored in chunks, tgsis.write_chunk_rows writes rows of them.',
+                                  quote_ident(p_idfield), coalesce(left(p_ids::text, 80), 'NULL'), left(p_keys::text, 80));
+    END IF;
     SELECT * INTO v_t FROM tgsis.versioned_tables WHERE schemaname = p_schema AND tablename = p_table;
     IF NOT FOUND THEN
         RAISE EXCEPTION 'table %.% is not versioned', quote_ident(p_schema), quote_ident(p_table)
@@ -73,16 +83,16 @@ BEGIN
     IF cardinality(v_none) > 0 THEN
         PERFORM tgsis.unversioned_revision(v_none);  -- TG305
         SELECT r[1]::bigint INTO v_gone FROM tgsis.storage_run(v_t, true, format(
-            'DELETE FROM %I.%I WHERE %s AND revision = 0', p_schema, p_table || '_ver', v_where),
+            'DELETE FROM %s WHERE %s AND revision = 0', v_storage, v_where),
             v_none::text[], NULL, v_write.revisions, v_write.revision, p_ids) AS r;
         p_keys := ARRAY(SELECT k FROM unnest(p_keys) AS k WHERE k <> ALL (v_none));
     END IF;
     SELECT r[1]::bigint INTO v_deleted FROM tgsis.storage_run(v_t, true, format(
-        'DELETE FROM %I.%I WHERE %s AND revision = $4', p_schema, p_table || '_ver', v_where),
+        'DELETE FROM %s WHERE %s AND revision = $4', v_storage, v_where),
         p_keys::text[], NULL, v_write.revisions, v_write.revision, p_ids) AS r;
     SELECT r[1]::bigint INTO v_closed FROM tgsis.storage_run(v_t, true, format(
-        'UPDATE %I.%I v SET lastrevs = v.lastrevs || $4
-          WHERE %s AND (v.revision = ANY ($3)) IS TRUE AND NOT (v.lastrevs && $3)', p_schema, p_table || '_ver', v_where),
+        'UPDATE %s v SET lastrevs = v.lastrevs || $4
+          WHERE %s AND (v.revision = ANY ($3)) IS TRUE AND NOT (v.lastrevs && $3)', v_storage, v_where),
         p_keys::text[], NULL, v_write.revisions, v_write.revision, p_ids) AS r;
     IF v_closed > 0 THEN
         PERFORM tgsis.note_changed_objects(p_schema, p_table, v_write.revision, p_keys::text[]);  -- tgsis.revision_objects

@@ -78,7 +78,7 @@ BEGIN
     v_used := '{}';
 
     FOR v_t IN SELECT * FROM tgsis.versioned_tables t ORDER BY t.schemaname, t.tablename LOOP
-        v_ver := format('%I.%I', v_t.schemaname, v_t.tablename || '_ver');
+        v_ver := tgsis.storage_table(v_t.schemaname, v_t.tablename);  -- <table>_ver, or the chunk versions of tgsis.<table>_chunk
         name := format('%s.%s', v_t.schemaname, v_t.tablename);
         -- every statement on storage as its owner (tgsis.storage_run): $1 the kept sets, $2 their
         -- revisions, $3 the checked revisions, $5 the loose numbers

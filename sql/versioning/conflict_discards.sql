@@ -90,11 +90,14 @@ BEGIN
                             v.revision = ANY ($2) AND NOT (v.lastrevs && $2) AS in_base,
                             v.revision = ANY ($3) AND NOT (v.lastrevs && $3) AS in_child,
                             v.revision = ANY ($5::integer[]) AND NOT (v.lastrevs && $5::integer[]) AS in_parent
-                       FROM %3$I.%4$I v
+                       FROM %3$s v
                       WHERE v.%1$I = ANY ($1::%5$s[])
-                        -- not a row version all three see (a base row neither side closed): rows of the object
-                        -- that nobody changed cost a test, not a jsonb
-                        AND NOT (v.revision = ANY ($2) AND NOT (v.lastrevs && $3)
+                        -- not a row version all three see: rows of the object that nobody changed cost a test,
+                        -- not a jsonb. (All three sets hold its revision: a base revision of the version, merged
+                        -- into the parent as a copy, is not in the parent set; a row of it was taken for one all
+                        -- three see, and the copy in the parent counted as a row the parent added.)
+                        AND NOT (v.revision = ANY ($2) AND v.revision = ANY ($3) AND v.revision = ANY ($5::integer[])
+                                 AND NOT (v.lastrevs && $2) AND NOT (v.lastrevs && $3)
                                  AND NOT (v.lastrevs && $5::integer[]))
                         AND (v.revision = ANY (%8$L::integer[]) OR (v.revclosed AND v.lastrevs && %8$L::integer[]))),
                  keyed AS (
@@ -123,7 +126,7 @@ BEGIN
                    FROM lost
                   GROUP BY obj, solution, discarded
                   ORDER BY obj, solution',
-                v_t.objectkeyfield, v_rowkey, v_t.schemaname, v_t.tablename || '_ver', tgsis.object_key_type(v_t),
+                v_t.objectkeyfield, v_rowkey, tgsis.storage_rows(v_t), NULL, tgsis.object_key_type(v_t),
                 v_t.keycolumns || v_t.objectkeyfield,
                 tgsis.object_key_text_sql(v_t, 'v'),  -- the key's canonical text, as the conflicts name it
                 v_differ),

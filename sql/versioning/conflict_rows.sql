@@ -23,13 +23,13 @@ BEGIN
         RETURN QUERY EXECUTE format(
             'WITH rows AS (
                  SELECT s.side, to_jsonb(v.*) - ''revision'' - ''lastrevs'' - ''revclosed'' AS r, v.revision
-                   FROM %I.%I v, (VALUES (''child'', $2), (''parent'', $3)) AS s(side, revs)
+                   FROM %s v, (VALUES (''child'', $2), (''parent'', $3)) AS s(side, revs)
                   WHERE v.%I = $1::%s AND v.revision = ANY (s.revs) AND NOT (v.lastrevs && s.revs))
              SELECT %L::text, a.side, (SELECT jsonb_object_agg(key, a.r -> key) FROM unnest($4::text[]) AS key), a.r
                FROM rows a
               WHERE NOT EXISTS (SELECT FROM rows b WHERE b.side <> a.side AND b.r = a.r)
               ORDER BY 3, 2',
-            v_t.schemaname, v_t.tablename || '_ver', v_t.objectkeyfield, tgsis.object_key_type(v_t), v_t.shortname)
+            tgsis.storage_rows(v_t), v_t.objectkeyfield, tgsis.object_key_type(v_t), v_t.shortname)
           USING v_key, v_version.workingset, v_parent, v_t.keycolumns;
     END LOOP;
 END

@@ -1,5 +1,6 @@
 -- tgsis.copy_object_match_sql(table, own, other): the SQL condition that a row v tgsis.copy_object_state would write can be left alone.
--- True when v's row key (the table's keycolumns) has, among the rows of the
+-- True when v's key (the storage's: the table's keycolumns, or (geoid, chunk)
+-- for chunk versions, tgsis.storage_key) has, among the rows of the
 -- objects being copied ($1, in the key column's own type), exactly one row
 -- satisfying p_own (v itself) and exactly one satisfying p_other, and that
 -- one holds exactly v's content (tgsis.same_row_sql). p_own and p_other are
@@ -18,11 +19,11 @@ AS $$
     SELECT pg_catalog.format(
         'coalesce((SELECT count(*) FILTER (WHERE %1$s) = 1 AND count(*) FILTER (WHERE %2$s) = 1
                           AND bool_and(%3$s) FILTER (WHERE %2$s)
-                     FROM %4$I.%5$I f
+                     FROM %4$s f
                     WHERE %6$s AND f.%7$I = ANY ($1::%8$s[])), false)',
-        p_own, p_other, tgsis.same_row_sql(p_t, 'f', 'v'), p_t.schemaname, p_t.tablename || '_ver',
+        p_own, p_other, tgsis.same_row_sql(p_t, 'f', 'v'), tgsis.storage_table(p_t.schemaname, p_t.tablename), NULL,
         (SELECT pg_catalog.string_agg(pg_catalog.format('f.%1$I = v.%1$I', k), ' AND ' ORDER BY o)
-           FROM pg_catalog.unnest(p_t.keycolumns) WITH ORDINALITY AS u(k, o)),
+           FROM pg_catalog.unnest(tgsis.storage_key(p_t)) WITH ORDINALITY AS u(k, o)),
         p_t.objectkeyfield, tgsis.object_key_type(p_t))
 $$;
 

@@ -14,6 +14,10 @@
 -- The match is read by key (the storage's primary key) for the candidate
 -- rows only: the cost follows the change, not the object's size.
 -- The common step of merge (child's state into the parent) and refresh.
+-- On a model table stored in chunks the rows are chunk versions (tgsis.<table>_chunk,
+-- keyed by (geoid, chunk): tgsis.storage_key), closed and copied whole: the unit of
+-- a conflict is the object, so copying one side's chunks is copying its rows
+-- (docs/storage.md, "Versioning of chunks").
 -- Every statement also states what both kinds of rows share, in a form the
 -- storage's revision indexes serve (tgsis.create_revision_indexes): a row
 -- visible in one set and not the other was written in a revision of their
@@ -67,7 +71,7 @@ BEGIN
     -- only rows p_from does not see, so it cannot change what is copied, and
     -- copies made first would look like rows to close
     FOR v_t IN SELECT * FROM tgsis.versioned_tables WHERE objectclass = p_objectclass ORDER BY iudorder DESC, shortname LOOP
-        v_ver := format('%I.%I', v_t.schemaname, v_t.tablename || '_ver');
+        v_ver := tgsis.storage_table(v_t.schemaname, v_t.tablename);  -- <table>_ver, or tgsis.<table>_chunk
         v_keytype := tgsis.object_key_type(v_t);  -- keys compared in the column's own type, so that its index serves
         -- a row v only p_to sees stays when its key's one row only p_from sees holds its content
         v_same := tgsis.copy_object_match_sql(v_t, v_to_only, v_from_only);
@@ -95,7 +99,7 @@ BEGIN
         END IF;
     END LOOP;
     FOR v_t IN SELECT * FROM tgsis.versioned_tables WHERE objectclass = p_objectclass ORDER BY iudorder, shortname LOOP
-        v_ver := format('%I.%I', v_t.schemaname, v_t.tablename || '_ver');
+        v_ver := tgsis.storage_table(v_t.schemaname, v_t.tablename);  -- <table>_ver, or tgsis.<table>_chunk
         -- every stored column but the generated ones; a fresh revision, nothing closed
         SELECT string_agg(format('%I', attname), ', ' ORDER BY attnum) INTO v_cols
           FROM pg_catalog.pg_attribute

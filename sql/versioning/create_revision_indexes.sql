@@ -32,6 +32,10 @@
 -- Searched by spans of vertex ids (BETWEEN), not by an = ANY of the ids: a
 -- BRIN is searched once per value of an = ANY (tgsis.mesh_merge_work,
 -- tgsis.db._merge_states).
+-- A model table stored in chunks (issue 40, tgsis.stored_in_chunks) has no
+-- <table>_ver: its chunk table got the first two, on the chunk versions,
+-- from tgsis.create_chunk_table, and nothing is done (the cells' vertex
+-- BRIN has no column to index there: vertex ids are inside arrays).
 -- Idempotent (an index of the same kind already there is kept); called by
 -- tgsis.enable_versioning_rel and by the upgrade for tables versioned before.
 -- Runs with the caller's rights: the caller acts as the storage's owner.
@@ -42,8 +46,12 @@ VOLATILE
 SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
-    v_rel regclass := format('%I.%I', p_schema, p_table || '_ver')::regclass;
+    v_rel regclass;
 BEGIN
+    IF p_schema = 'tgsis' AND tgsis.stored_in_chunks(p_table) THEN
+        RETURN;
+    END IF;
+    v_rel := format('%I.%I', p_schema, p_table || '_ver')::regclass;
     IF NOT EXISTS (SELECT FROM pg_index i JOIN pg_class c ON c.oid = i.indexrelid JOIN pg_am a ON a.oid = c.relam
                     WHERE i.indrelid = v_rel AND a.amname = 'brin'
                       AND i.indkey[0] = (SELECT attnum FROM pg_attribute WHERE attrelid = v_rel AND attname = 'revision')) THEN
@@ -69,4 +77,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.create_revision_indexes(text, text, text) IS
-    'create the indexes of <table>_ver that find row versions written or closed in given revisions: a BRIN on revision and a btree on the object key of closed rows (WHERE revclosed); on the cell tables of models 1, 2 and 3 also a BRIN on geoid, the instant or period (times, timem) and the vertex columns (the cells of an object on given vertices); idempotent';
+    'create the indexes of <table>_ver that find row versions written or closed in given revisions: a BRIN on revision and a btree on the object key of closed rows (WHERE revclosed); on the cell tables of models 1, 2 and 3 also a BRIN on geoid, the instant or period (times, timem) and the vertex columns (the cells of an object on given vertices); idempotent; nothing for a model table stored in chunks (its chunk table has its own)';

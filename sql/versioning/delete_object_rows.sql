@@ -32,6 +32,17 @@ BEGIN
     v_where := format('%I = ANY ($1)', p_keyfield)
                || CASE WHEN p_idfield IS NOT NULL THEN format(' AND %I = ANY ($4)', p_idfield) ELSE '' END;
     IF NOT EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = p_schema AND tablename = p_table) THEN
+        -- stored in chunks: whole objects' chunks go at once (every chunk version is revision 0, the one state);
+        -- never a whole chunk for some of its rows (tgsis.close_object_rows refuses that as for versioned storage)
+        IF p_schema = 'tgsis' AND tgsis.stored_in_chunks(p_table) THEN
+            IF p_idfield IS NOT NULL THEN
+                RETURN tgsis.close_object_rows(p_schema, p_table, p_keyfield, p_keys, p_idfield, p_ids);  -- TG100
+            END IF;
+            EXECUTE format('DELETE FROM %s WHERE %I = ANY ($1)', tgsis.storage_table(p_schema, p_table), p_keyfield)
+              USING p_keys;
+            GET DIAGNOSTICS v_deleted = ROW_COUNT;
+            RETURN v_deleted;
+        END IF;
         EXECUTE format('DELETE FROM %I.%I WHERE %s', p_schema, p_table, v_where)
           USING p_keys, NULL::integer, NULL::integer[], p_ids;
         GET DIAGNOSTICS v_deleted = ROW_COUNT;

@@ -41,7 +41,7 @@ BEGIN
         v_objects := format('v.%I = ANY ($1::%s[])', v_t.objectkeyfield, tgsis.object_key_type(v_t));
         -- as the storage's owner (tgsis.storage_run)
         SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_t, true, format(
-            'DELETE FROM %I.%I v WHERE %s AND v.revision = ANY ($2)', v_t.schemaname, v_t.tablename || '_ver', v_objects),
+            'DELETE FROM %s v WHERE %s AND v.revision = ANY ($2)', tgsis.storage_table(v_t.schemaname, v_t.tablename), v_objects),
             v_keys, v_revs) AS r;
         v_removed := v_removed + v_count;
         -- rows of ancestors that the version closed become live again for nobody else: drop its revisions

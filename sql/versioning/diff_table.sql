@@ -29,11 +29,11 @@ BEGIN
     SELECT string_agg(format('%I', k), ', ' ORDER BY o) INTO v_keys FROM unnest(v_t.keycolumns) WITH ORDINALITY AS u(k, o);
     RETURN QUERY EXECUTE format(
         'WITH a AS (SELECT %1$s, %7$s AS obj, to_jsonb(v.*) - ''revision'' - ''lastrevs'' - ''revclosed'' AS r
-                      FROM %3$I.%4$I v
+                      FROM %3$s v
                      WHERE v.revision = ANY ($1) AND NOT (v.lastrevs && $1)
                        AND NOT (v.revision = ANY ($2) AND NOT (v.lastrevs && $2))),
               b AS (SELECT %1$s, %7$s AS obj, to_jsonb(v.*) - ''revision'' - ''lastrevs'' - ''revclosed'' AS r
-                      FROM %3$I.%4$I v
+                      FROM %3$s v
                      WHERE v.revision = ANY ($2) AND NOT (v.lastrevs && $2)
                        AND NOT (v.revision = ANY ($1) AND NOT (v.lastrevs && $1)))
          SELECT %5$L::text, coalesce(a.obj, b.obj), %6$L::text,
@@ -42,7 +42,7 @@ BEGIN
            FROM a FULL JOIN b USING (%1$s)
           WHERE a.r IS DISTINCT FROM b.r
           GROUP BY 2 ORDER BY 2',
-        v_keys, v_t.objectkeyfield, v_t.schemaname, v_t.tablename || '_ver', v_t.objectclass, v_t.shortname,
+        v_keys, v_t.objectkeyfield, tgsis.storage_rows(v_t), NULL, v_t.objectclass, v_t.shortname,
         tgsis.object_key_text_sql(v_t, 'v'))
       USING v_a, v_b;
 END

@@ -1,6 +1,10 @@
 -- tgsis.disable_versioning_rel(view, force): the work of tgsis.disable_versioning on a resolved view.
 -- Refuses while versions other than DEFAULT have changes in it (they would be
--- lost) unless forced.
+-- lost) unless forced. A model table stored in chunks (tgsis.stored_in_chunks)
+-- keeps its chunk table and face: the chunk versions DEFAULT does not see go,
+-- the others become revision 0, open (unversioned chunk storage: every chunk
+-- version is the one state), and the storage's triggers go with the face's
+-- write-right check; the face shows every chunk version from then on.
 CREATE FUNCTION tgsis.disable_versioning_rel(p_table regclass, p_force boolean DEFAULT false)
 RETURNS bigint
 LANGUAGE plpgsql
@@ -11,6 +15,7 @@ DECLARE
     v_t         tgsis.versioned_tables := tgsis.versioned_table(p_table);
     v_view      regclass;
     v_ver       text := v_t.tablename || '_ver';
+    v_storage   text := tgsis.storage_table(v_t.schemaname, v_t.tablename);  -- <table>_ver, or tgsis.<table>_chunk
     v_default   integer[];
     v_dependent text;
     v_name      text;
@@ -30,9 +35,9 @@ BEGIN
     END IF;
     SELECT workingset INTO v_default FROM tgsis.versions WHERE versionid = 0;
     IF NOT coalesce(p_force, false) THEN
-        EXECUTE format('SELECT string_agg(DISTINCT x.name, '', '') FROM %I.%I v, tgsis.revisions r, tgsis.versions x
+        EXECUTE format('SELECT string_agg(DISTINCT x.name, '', '') FROM %s v, tgsis.revisions r, tgsis.versions x
                          WHERE x.versionid = r.versionid AND r.versionid <> 0
-                           AND (r.revision = v.revision OR r.revision = ANY (v.lastrevs))', v_t.schemaname, v_ver)
+                           AND (r.revision = v.revision OR r.revision = ANY (v.lastrevs))', v_storage)
            INTO v_dependent;
         IF v_dependent IS NOT NULL THEN
             RAISE EXCEPTION 'versions other than DEFAULT changed %.%: %', v_t.schemaname, v_t.tablename, v_dependent
@@ -40,6 +45,30 @@ BEGIN
                       DETAIL = 'Only the rows DEFAULT sees now are kept; those changes would be lost.',
                       HINT = 'merge or delete those versions first, or pass p_force => true';
         END IF;
+    END IF;
+
+    IF v_t.schemaname = 'tgsis' AND tgsis.stored_in_chunks(v_t.tablename) THEN
+        -- the rights the chunk table did not keep while versioned come back from the face (tgsis.enable_feature_versioning)
+        FOR v_acl IN
+            SELECT a.privilege_type, a.grantee FROM pg_class c, aclexplode(c.relacl) AS a
+             WHERE c.oid = v_view AND a.grantee <> c.relowner
+               AND a.privilege_type IN ('UPDATE', 'DELETE', 'TRUNCATE', 'REFERENCES', 'TRIGGER')
+        LOOP
+            EXECUTE format('GRANT %s ON %s TO %s', v_acl.privilege_type, v_storage,
+                           CASE WHEN v_acl.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_acl.grantee)) END);
+        END LOOP;
+        EXECUTE format('DROP TRIGGER IF EXISTS tgsis_versioning_rights ON %I.%I', v_t.schemaname, v_t.tablename);
+        EXECUTE format('DROP TRIGGER IF EXISTS tgsis_storage_write ON %s', v_storage);
+        EXECUTE format('DROP TRIGGER IF EXISTS tgsis_storage_rows ON %s', v_storage);
+        EXECUTE format('DROP TRIGGER IF EXISTS tgsis_storage_changes ON %s', v_storage);
+        -- DEFAULT's chunk versions stay, as revision 0: at most one per chunk (every set sees one version of a chunk)
+        EXECUTE format('DELETE FROM %s v WHERE NOT (v.revision = ANY ($1) AND NOT (v.lastrevs && $1))', v_storage)
+          USING v_default;
+        GET DIAGNOSTICS v_removed = ROW_COUNT;
+        EXECUTE format('UPDATE %s v SET revision = 0, lastrevs = ''{}'' WHERE v.revision <> 0 OR v.revclosed', v_storage);
+        PERFORM tgsis.unregister_versioned_table(v_t.schemaname, v_t.tablename);
+        PERFORM tgsis.restore_dropped_constraints(v_t.schemaname, v_t.tablename);
+        RETURN v_removed;
     END IF;
 
     -- the rights storage did not keep (updates and deletes went through the view) come back from the view

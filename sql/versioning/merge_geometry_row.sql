@@ -22,10 +22,10 @@ DECLARE
 BEGIN
     EXECUTE format('SELECT count(*), ARRAY[min(v.x), min(v.y), min(v.z)], ARRAY[max(v.x), max(v.y), max(v.z)]
                       FROM %s v WHERE v.geoid = $1 AND v.revision = ANY ($2) AND NOT (v.lastrevs && $2)',
-                   tgsis.storage_table('tgsis', 'vrtx'))
+                   tgsis.storage_row_versions('tgsis', 'vrtx'))
        INTO v_n, v_low, v_high USING p_geoid, p_set;
     EXECUTE format('SELECT count(*) FROM %s v WHERE v.geoid = $1 AND v.revision = ANY ($2) AND NOT (v.lastrevs && $2)',
-                   tgsis.storage_table('tgsis', p_table))
+                   tgsis.storage_row_versions('tgsis', p_table))
        INTO v_m USING p_geoid, p_set;
     IF v_n = 0 THEN
         v_low := NULL;

@@ -240,7 +240,7 @@ BEGIN
              SELECT coalesce(array_agg(ARRAY[r.firstid, r.lastid, r.part] ORDER BY r.firstid) FILTER (WHERE r.st = 4), ''{}''),
                     coalesce(array_agg(ARRAY[r.firstid, r.lastid, r.part] ORDER BY r.firstid) FILTER (WHERE r.st = 8), ''{}'')
                FROM runs r',
-            tgsis.storage_table('tgsis', v_table), tgsis.storage_table('tgsis', 'part'), v_cellid)
+            tgsis.storage_row_versions('tgsis', v_table), tgsis.storage_table('tgsis', 'part'), v_cellid)
           INTO v_runs_old, v_runs_new USING p_geoid, v_base;
     END IF;
     -- GOCAD atoms (tgsis.atom: a vertex that repeats another, refid): gone, new, or repeating another vertex now
@@ -380,15 +380,56 @@ BEGIN
             v_written := v_written + v_count;
         END IF;
     END LOOP;
-    v_written := v_written + tgsis.delete_object_rows('tgsis', v_table, 'geoid', ARRAY[p_geoid], v_cellid, v_cgone)
-                           + tgsis.delete_object_rows('tgsis', 'vrtx', 'geoid', ARRAY[p_geoid], 'vrtxid', v_vgone);
-    IF cardinality(v_vid) > 0 THEN
-        EXECUTE format('INSERT INTO %s (geoid, vrtxid, x, y, z, revision) SELECT $1, u.id, u.x, u.y, u.z, $6
-                          FROM unnest($2, $3, $4, $5) AS u (id, x, y, z)', tgsis.storage_table('tgsis', 'vrtx'))
-          USING p_geoid, v_vid, v_vx, v_vy, v_vz, v_rev;
-        v_written := v_written + cardinality(v_vid);
+    -- the vertices, then the cells: closed (gone or differing) and written (new or differing). Stored in chunks
+    -- (issue 40, tgsis.stored_in_chunks): the touched chunks rewritten whole by the one chunk writer from a
+    -- temporary table of the rows (a removed id becomes a hole), after the object's write lock, and the object
+    -- noted as the face's triggers note it (no statement trigger on a chunk table does). The writer is in the
+    -- chunks layer, above this one: named at run time (tests/test_sql_layers.py)
+    FOR v_t IN SELECT * FROM (VALUES (1, 'vrtx', 'vrtxid'), (2, v_table, v_cellid)) AS t (o, tablename, idcol)
+                WHERE tgsis.stored_in_chunks(t.tablename) ORDER BY t.o LOOP
+        PERFORM tgsis.object_write_lock(t.objectclass, ARRAY[v_key])
+           FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = v_t.tablename;
+        DROP TABLE IF EXISTS pg_temp.tgsis_mw_rows;
+        EXECUTE format('CREATE TEMPORARY TABLE tgsis_mw_rows ON COMMIT DROP AS
+                        SELECT s.*, false AS _delete FROM tgsis.%I s WITH NO DATA', v_t.tablename || '_shape');
+        IF v_t.o = 1 THEN
+            INSERT INTO pg_temp.tgsis_mw_rows (geoid, vrtxid, x, y, z, _delete)
+            SELECT p_geoid, u.id, u.x, u.y, u.z, false FROM unnest(v_vid, v_vx, v_vy, v_vz) AS u (id, x, y, z)
+            UNION ALL
+            SELECT p_geoid, g.id, NULL, NULL, NULL, true FROM unnest(v_vgone) AS g (id) WHERE NOT (g.id = ANY (v_vid));
+            v_count := cardinality(v_vgone) + cardinality(v_vid);
+        ELSE
+            EXECUTE format('INSERT INTO pg_temp.tgsis_mw_rows (geoid, %I, %s, _delete)
+                            SELECT $1, u.id, %s, false FROM unnest($2) WITH ORDINALITY AS u (id, o)
+                            UNION ALL
+                            SELECT $1, g.id, %s, true FROM unnest($4) AS g (id) WHERE NOT (g.id = ANY ($2))',
+                           v_cellid,
+                           (SELECT string_agg(format('vrtxid%s', i), ', ' ORDER BY i) FROM generate_series(1, v_k) AS i),
+                           (SELECT string_agg(format('$3[(u.o - 1) * %s + %s]', v_k, i), ', ' ORDER BY i)
+                              FROM generate_series(1, v_k) AS i),
+                           (SELECT string_agg('NULL', ', ') FROM generate_series(1, v_k) AS i))
+              USING p_geoid, v_cid, v_cv, v_cgone;
+            v_count := cardinality(v_cgone) + cardinality(v_cid);
+        END IF;
+        IF v_count > 0 THEN
+            EXECUTE format('SELECT tgsis.%I($1, $2)', 'write_chunk_rows') USING v_t.tablename, 'pg_temp.tgsis_mw_rows'::regclass;
+            PERFORM tgsis.record_changed_objects('tgsis', v_t.tablename, ARRAY[v_key]);
+            v_written := v_written + v_count;
+        END IF;
+    END LOOP;
+    IF NOT tgsis.stored_in_chunks(v_table) THEN
+        v_written := v_written + tgsis.delete_object_rows('tgsis', v_table, 'geoid', ARRAY[p_geoid], v_cellid, v_cgone);
     END IF;
-    IF cardinality(v_cid) > 0 THEN
+    IF NOT tgsis.stored_in_chunks('vrtx') THEN
+        v_written := v_written + tgsis.delete_object_rows('tgsis', 'vrtx', 'geoid', ARRAY[p_geoid], 'vrtxid', v_vgone);
+        IF cardinality(v_vid) > 0 THEN
+            EXECUTE format('INSERT INTO %s (geoid, vrtxid, x, y, z, revision) SELECT $1, u.id, u.x, u.y, u.z, $6
+                              FROM unnest($2, $3, $4, $5) AS u (id, x, y, z)', tgsis.storage_table('tgsis', 'vrtx'))
+              USING p_geoid, v_vid, v_vx, v_vy, v_vz, v_rev;
+            v_written := v_written + cardinality(v_vid);
+        END IF;
+    END IF;
+    IF NOT tgsis.stored_in_chunks(v_table) AND cardinality(v_cid) > 0 THEN
         EXECUTE format('INSERT INTO %s (geoid, %I, %s, revision) SELECT $1, u.id, %s, $4
                           FROM unnest($2) WITH ORDINALITY AS u (id, o)',
                        tgsis.storage_table('tgsis', v_table), v_cellid,

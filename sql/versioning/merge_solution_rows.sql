@@ -136,8 +136,10 @@ BEGIN
     EXECUTE format('UPDATE pg_temp.tgsis_mw_sv s SET based = true, b_x = v.x, b_y = v.y, b_z = v.z FROM %s v
                      WHERE v.geoid = $1 AND v.%s = s.id AND NOT s.changed%s
                        AND v.revision = ANY ($2) AND NOT (v.revclosed AND v.lastrevs && $2)',
-                   tgsis.storage_table('tgsis', CASE WHEN v_info.times IS NULL THEN 'vrtx'
-                                                     WHEN v_info.timem IS NULL THEN 'times_vrtx' ELSE 'd4dvrtx' END),
+                   -- (stored in chunks: only the chunks of those ids decoded)
+                   tgsis.storage_row_versions('tgsis', CASE WHEN v_info.times IS NULL THEN 'vrtx'
+                                                            WHEN v_info.timem IS NULL THEN 'times_vrtx' ELSE 'd4dvrtx' END,
+                                              ARRAY(SELECT s.id FROM pg_temp.tgsis_mw_sv s WHERE NOT s.changed)),
                    CASE WHEN v_info.timem IS NULL THEN 'vrtxid' ELSE 'nodeid' END,
                    CASE WHEN v_info.timem IS NOT NULL THEN ' AND v.timem = $4 AND v.timet = $3'
                         WHEN v_info.times IS NOT NULL THEN ' AND v.times = $3' ELSE '' END)
@@ -155,7 +157,9 @@ BEGIN
                    (SELECT string_agg(format('v.%s%s', CASE WHEN v_info.timem IS NULL THEN 'vrtxid' ELSE 'nodeid' END, i),
                                       ', ' ORDER BY i)
                       FROM generate_series(1, v_info.k) AS i),
-                   tgsis.storage_table('tgsis', v_info.simplex), v_info.cellid,
+                   tgsis.storage_row_versions('tgsis', v_info.simplex,
+                                              ARRAY(SELECT s.id FROM pg_temp.tgsis_mw_sc s WHERE NOT s.changed)),
+                   v_info.cellid,
                    CASE WHEN v_info.timem IS NOT NULL THEN ' AND v.timem = $4'
                         WHEN v_info.times IS NOT NULL THEN ' AND v.times = $3' ELSE '' END)
       USING p_geoid, v_info.base, v_info.times, v_info.timem;

@@ -14,7 +14,11 @@
 -- set: the vertices (tgsis.vrtx, GOCAD atoms as the vertex value refid, the
 -- vertex properties), the cells (the class's simplex table, the cell
 -- properties, parts kept in tgsis.part as the cell value part). Rows of other
--- keys are the same in the three states. Then, as merge3 does:
+-- keys are the same in the three states. Model-1 tables stored in chunks (issue 40) are read
+-- through their decoded chunk versions (tgsis.storage_row_versions): the changed keys are then the
+-- ids of the chunk versions written or closed in those revisions, a superset whose extra ids the
+-- three states hold alike (they change nothing, as a row rewritten with its own values does).
+-- Then, as merge3 does:
 --   * the version's new ids are renumbered (merge3's child renumbering: a new
 --     row with the content of a parent's new row takes its id, pairing the
 --     k-th of equal contents with the k-th; a new id the parent uses for
@@ -112,8 +116,13 @@ DECLARE
     v_y       integer;
     v_obj     text := 'v.geoid = $1';
     v_cobj    text;
-    v_vsrc    text := 'tgsis.vrtx_ver';
+    v_vsrc    text;
     v_csrc    text;
+    v_vkeyed  text;
+    v_ckeyed  text;
+    v_ids     bigint[];
+    v_top     text[];
+    v_last    bigint;
     v_atoms   text := '';
 BEGIN
     SELECT * INTO v_version FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
@@ -210,6 +219,10 @@ BEGIN
         v_obj := format('v.geoid = $1 AND v.timem = %L::float8 AND v.timet = %L::float8', p_timem, p_times);
         v_cobj := format('v.geoid = $1 AND v.timem = %L::float8', p_timem);
     END IF;
+    IF p_times IS NULL THEN  -- model 1: the rows of the storage, decoded chunk versions when stored in chunks
+        v_vsrc := tgsis.storage_row_versions('tgsis', 'vrtx');
+        v_csrc := tgsis.storage_row_versions('tgsis', v_table);
+    END IF;
     v_csrc := coalesce(v_csrc, format('tgsis.%I', v_table || '_ver'));
     v_cobj := coalesce(v_cobj, v_obj);
     v_row := format('ARRAY[%s]', (SELECT string_agg(format('v.vrtxid%s', i), ', ') FROM generate_series(1, v_k) AS i));
@@ -256,14 +269,17 @@ BEGIN
         v_ckeys := v_ckeys || ARRAY(SELECT r.key FROM tgsis.merge_property_rows(v_cpt, p_geoid, v_since, NULL, NULL, NULL, NULL, p_times, p_timem) AS r);
     END IF;
     IF v_runs THEN  -- the cells of a part run some set sees otherwise may change their part
-        EXECUTE format('SELECT $3 || ARRAY(SELECT c.%1$I FROM tgsis.%2$I c
+        EXECUTE format('SELECT $3 || ARRAY(SELECT c.%1$I FROM %2$s c
                                             JOIN (SELECT v.firstid, v.lastid FROM tgsis.part_ver v WHERE v.geoid = $1 AND %3$s) r
                                               ON c.%1$I BETWEEN r.firstid AND r.lastid
-                                           WHERE c.geoid = $1)', v_cellid, v_table || '_ver', v_changed)
+                                           WHERE c.geoid = $1)', v_cellid, v_csrc, v_changed)
            INTO v_ckeys USING p_geoid, v_since, v_ckeys;
     END IF;
     v_vkeys := ARRAY(SELECT DISTINCT k FROM unnest(v_vkeys) AS k);
     v_ckeys := ARRAY(SELECT DISTINCT k FROM unnest(v_ckeys) AS k);
+    -- (stored in chunks: only the chunks of those keys decoded; the same relation as v_vsrc / v_csrc on rows)
+    v_vkeyed := CASE WHEN p_times IS NULL THEN tgsis.storage_row_versions('tgsis', 'vrtx', v_vkeys) ELSE v_vsrc END;
+    v_ckeyed := CASE WHEN p_times IS NULL THEN tgsis.storage_row_versions('tgsis', v_table, v_ckeys) ELSE v_csrc END;
 
     -- 2. their rows as each state has them (st: 1 base, 2 parent, 4 version), values as canonical texts
     v_seen := '(v.revision = ANY (CASE s.st WHEN 1 THEN $2 WHEN 2 THEN $3 ELSE $4 END)
@@ -272,7 +288,7 @@ BEGIN
                                        val text, ref bigint) ON COMMIT DROP;
     EXECUTE format('INSERT INTO pg_temp.tgsis_mr_v (id, st, x, y, z)
                     SELECT v.vrtxid, s.st, v.x, v.y, v.z FROM %2$s v, (VALUES (1::smallint), (2), (4)) AS s (st)
-                     WHERE %3$s AND v.vrtxid = ANY ($5) AND %1$s', v_seen, v_vsrc, v_obj)
+                     WHERE %3$s AND v.vrtxid = ANY ($5) AND %1$s', v_seen, v_vkeyed, v_obj)
        USING p_geoid, v_base, v_parent.workingset, v_version.workingset, v_vkeys;
     IF p_times IS NULL THEN
     EXECUTE format('UPDATE pg_temp.tgsis_mr_v m SET ref = v.refid
@@ -290,7 +306,7 @@ BEGIN
         ON COMMIT DROP;
     EXECUTE format('INSERT INTO pg_temp.tgsis_mr_c (id, st, v)
                     SELECT v.%1$I, s.st, %2$s FROM %3$s v, (VALUES (1::smallint), (2), (4)) AS s (st)
-                     WHERE %5$s AND v.%1$I = ANY ($5) AND %4$s', v_cellid, v_row, v_csrc, v_seen, v_cobj)
+                     WHERE %5$s AND v.%1$I = ANY ($5) AND %4$s', v_cellid, v_row, v_ckeyed, v_seen, v_cobj)
        USING p_geoid, v_base, v_parent.workingset, v_version.workingset, v_ckeys;
     IF v_runs THEN
         EXECUTE format('UPDATE pg_temp.tgsis_mr_c m SET part = v.part
@@ -309,14 +325,25 @@ BEGIN
 
     -- 3. the version's new ids in the merged numbering (merge3's child renumbering): a new row with the
     -- content of a parent's new row takes its id (the k-th of equal contents the k-th), a new id the parent
-    -- uses for something else a fresh one above every id of the three states, in ascending order
+    -- uses for something else a fresh one above every id of the three states, in ascending order (stored in
+    -- chunks: the base's largest id is in its last chunk, the only one decoded)
+    v_top := ARRAY[v_csrc, v_vsrc];
+    FOR i IN 1 .. 2 LOOP
+        IF p_times IS NULL AND tgsis.stored_in_chunks((ARRAY[v_table, 'vrtx'])[i]) THEN
+            EXECUTE format('SELECT max(c.chunk) * (SELECT t.chunksize FROM tgsis.model_tables t WHERE t.tablename = %L)
+                              FROM %s c WHERE c.geoid = $1 AND c.revision = ANY ($2) AND NOT (c.revclosed AND c.lastrevs && $2)',
+                           (ARRAY[v_table, 'vrtx'])[i], tgsis.storage_table('tgsis', (ARRAY[v_table, 'vrtx'])[i]))
+               INTO v_last USING p_geoid, v_base;
+            v_top[i] := tgsis.storage_row_versions('tgsis', (ARRAY[v_table, 'vrtx'])[i], ARRAY[v_last]);
+        END IF;
+    END LOOP;
     EXECUTE format('SELECT greatest((SELECT max(m.id) FROM pg_temp.tgsis_mr_v m),
                                     (SELECT v.vrtxid FROM %3$s v WHERE %4$s AND v.revision = ANY ($2)
                                         AND NOT (v.revclosed AND v.lastrevs && $2) ORDER BY v.vrtxid DESC LIMIT 1)),
                            greatest((SELECT max(m.id) FROM pg_temp.tgsis_mr_c m),
                                     (SELECT v.%1$I FROM %2$s v WHERE %5$s AND v.revision = ANY ($2)
                                         AND NOT (v.revclosed AND v.lastrevs && $2) ORDER BY v.%1$I DESC LIMIT 1))',
-                   v_cellid, v_csrc, v_vsrc, v_obj, v_cobj)
+                   v_cellid, v_top[1], v_top[2], v_obj, v_cobj)
        INTO v_top_v, v_top_c USING p_geoid, v_base;
     BEGIN  -- a fresh id above every id: none when the ids reach the top of bigint
         CREATE TEMPORARY TABLE tgsis_mr_vmap ON COMMIT DROP AS
@@ -539,14 +566,15 @@ BEGIN
     -- 8. the base's coordinates of the vertices no side changed that a region touches (corners of its cells),
     -- for the boxes of the regions
     CREATE TEMPORARY TABLE tgsis_mr_vb (id bigint, x float8, y float8, z float8) ON COMMIT DROP;
+    v_ids := ARRAY(SELECT n.id FROM pg_temp.tgsis_mr_node n WHERE n.kind = 'v'
+                   UNION SELECT unnest(g.v) FROM pg_temp.tgsis_mr_margin g
+                   UNION SELECT unnest(c.v) FROM pg_temp.tgsis_mr_c c
+                   EXCEPT SELECT m.id FROM pg_temp.tgsis_mr_v m);
     EXECUTE format('INSERT INTO pg_temp.tgsis_mr_vb
              SELECT v.vrtxid, v.x, v.y, v.z FROM %s v
-              WHERE %s AND v.revision = ANY ($2) AND NOT (v.revclosed AND v.lastrevs && $2)
-                AND v.vrtxid = ANY (ARRAY(SELECT n.id FROM pg_temp.tgsis_mr_node n WHERE n.kind = ''v''
-                                          UNION SELECT unnest(g.v) FROM pg_temp.tgsis_mr_margin g
-                                          UNION SELECT unnest(c.v) FROM pg_temp.tgsis_mr_c c
-                                          EXCEPT SELECT m.id FROM pg_temp.tgsis_mr_v m))', v_vsrc, v_obj)
-       USING p_geoid, v_base;
+              WHERE %s AND v.revision = ANY ($2) AND NOT (v.revclosed AND v.lastrevs && $2) AND v.vrtxid = ANY ($3)',
+                   CASE WHEN p_times IS NULL THEN tgsis.storage_row_versions('tgsis', 'vrtx', v_ids) ELSE v_vsrc END, v_obj)
+       USING p_geoid, v_base, v_ids;
     RETURN (SELECT count(*) FROM pg_temp.tgsis_mr_node);
 END
 $$;

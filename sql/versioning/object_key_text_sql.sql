@@ -10,7 +10,7 @@ STABLE
 SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
-    v_storage regclass := format('%I.%I', p_t.schemaname, p_t.tablename || '_ver')::regclass;
+    v_storage regclass := tgsis.storage_table(p_t.schemaname, p_t.tablename)::regclass;
 BEGIN
     PERFORM tgsis.check_key_type(v_storage, p_t.objectkeyfield);
     RETURN tgsis.object_key_sql((SELECT a.atttypid FROM pg_catalog.pg_attribute a

@@ -8,7 +8,7 @@ STABLE
 AS $$
     SELECT pg_catalog.format_type(a.atttypid, a.atttypmod)
       FROM pg_catalog.pg_attribute a
-     WHERE a.attrelid = pg_catalog.format('%I.%I', p_t.schemaname, p_t.tablename || '_ver')::regclass
+     WHERE a.attrelid = tgsis.storage_table(p_t.schemaname, p_t.tablename)::regclass
        AND a.attname = p_t.objectkeyfield AND NOT a.attisdropped
 $$;
 

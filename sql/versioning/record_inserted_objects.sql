@@ -23,7 +23,7 @@ SET search_path = pg_catalog, pg_temp
 SET jit = off
 AS $$
 DECLARE
-    v_table    text := left(TG_TABLE_NAME, -4);
+    v_table    text := coalesce(TG_ARGV[1], left(TG_TABLE_NAME, -4));  -- (given for tgsis.<table>_chunk)
     v_revision integer;
     v_key      text;
     v_mixed    boolean;

@@ -21,9 +21,10 @@ BEGIN
     v_set := tgsis.revision_set(tgsis.version_id(p_version), p_revision);
     SELECT string_agg(format('v.%I', attname), ', ' ORDER BY attnum) INTO v_cols
       FROM pg_catalog.pg_attribute WHERE attrelid = v_rel AND attnum > 0 AND NOT attisdropped;
-    RETURN QUERY EXECUTE format('SELECT %s FROM %I.%I v WHERE (v.revision = ANY ($1)) IS TRUE '
+    -- (the stored row versions: <table>_ver, or a chunked model table's decoded chunk versions)
+    RETURN QUERY EXECUTE format('SELECT %s FROM %s v WHERE (v.revision = ANY ($1)) IS TRUE '
                                 'AND (NOT v.revclosed OR NOT (v.lastrevs && $1))',
-                                v_cols, v_t.schemaname, v_t.tablename || '_ver')
+                                v_cols, tgsis.storage_rows(v_t))
                  USING v_set;
 END
 $$;

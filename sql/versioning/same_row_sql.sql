@@ -22,7 +22,7 @@ AS $$
     WITH RECURSIVE col AS (
         SELECT a.attnum, a.attname, a.atttypid AS typid
           FROM pg_catalog.pg_attribute a
-         WHERE a.attrelid = pg_catalog.format('%I.%I', p_t.schemaname, p_t.tablename || '_ver')::regclass
+         WHERE a.attrelid = tgsis.storage_table(p_t.schemaname, p_t.tablename)::regclass
            AND a.attnum > 0 AND NOT a.attisdropped AND a.attgenerated = ''
            AND a.attname NOT IN ('revision', 'lastrevs')
         UNION ALL

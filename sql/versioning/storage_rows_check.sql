@@ -7,7 +7,8 @@
 -- naming how many rows and which revision they had to carry.
 -- Rows of features of classes without versioning (tgsis.unversioned_features)
 -- carry revision 0 instead, and only in DEFAULT's working revision.
--- Trigger arguments: object class, object key column.
+-- Trigger arguments: object class, object key column, and the table's name
+-- when its storage is not named <table>_ver (tgsis.<table>_chunk).
 CREATE FUNCTION tgsis.storage_rows_check()
 RETURNS trigger
 LANGUAGE plpgsql
@@ -51,7 +52,7 @@ BEGIN
                                        '(geoids %s) revision = 0', array_to_string(v_none[1:5], ', ')
                                        || CASE WHEN cardinality(v_none) > 5 THEN ', ...' ELSE '' END) ELSE '' END),
                   HINT = format('write through the view %I.%I, or label the rows with SELECT revision FROM tgsis.write_revision()',
-                                TG_TABLE_SCHEMA, left(TG_TABLE_NAME, -4));
+                                TG_TABLE_SCHEMA, coalesce(TG_ARGV[2], left(TG_TABLE_NAME, -4)));
     END IF;
     IF EXISTS (SELECT FROM tgsis.object_locks l WHERE l.objectclass = TG_ARGV[0]) THEN
         PERFORM tgsis.check_key_type(TG_RELID, TG_ARGV[1]);

@@ -29,7 +29,7 @@ LANGUAGE plpgsql
 VOLATILE
 AS $$
 DECLARE
-    v_storage text := format('%I.%I', p_t.schemaname, p_t.tablename || '_ver');
+    v_storage text := tgsis.storage_table(p_t.schemaname, p_t.tablename);  -- <table>_ver, or tgsis.<table>_chunk
     v_tgsis   oid  := (SELECT n.nspowner FROM pg_catalog.pg_namespace n WHERE n.nspname = 'tgsis');
     v_owner   oid;
 BEGIN

@@ -2,7 +2,9 @@
 -- Runs as tgsis's owner because only tgsis's definer code writes
 -- tgsis.versioned_tables; it removes a row only when the system catalogs say
 -- it is no longer true (<table> is a plain table again and <table>_ver is
--- gone), so a call can only remove stale rows. The notes of its changed
+-- gone; for a model table stored in chunks: its face has no write-right check
+-- of versioning left, tgsis.disable_versioning_rel), so a call can only remove
+-- stale rows. The notes of its changed
 -- objects (tgsis.revision_objects) go with it.
 CREATE FUNCTION tgsis.unregister_versioned_table(p_schema text, p_table text)
 RETURNS boolean
@@ -12,10 +14,16 @@ SECURITY DEFINER
 SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
-    v_rel regclass := to_regclass(format('%I.%I', p_schema, p_table));
+    v_rel   regclass := to_regclass(format('%I.%I', p_schema, p_table));
+    v_still boolean;
 BEGIN
-    IF v_rel IS NULL OR (SELECT relkind FROM pg_class WHERE oid = v_rel) NOT IN ('r', 'p')
-       OR to_regclass(format('%I.%I', p_schema, p_table || '_ver')) IS NOT NULL THEN
+    IF p_schema = 'tgsis' AND tgsis.stored_in_chunks(p_table) THEN
+        v_still := EXISTS (SELECT FROM pg_trigger tr WHERE tr.tgrelid = v_rel AND tr.tgname = 'tgsis_versioning_rights');
+    ELSE
+        v_still := v_rel IS NULL OR (SELECT relkind FROM pg_class WHERE oid = v_rel) NOT IN ('r', 'p')
+                   OR to_regclass(format('%I.%I', p_schema, p_table || '_ver')) IS NOT NULL;
+    END IF;
+    IF v_still THEN
         RAISE EXCEPTION '%.% is still versioned (or gone): its registration stays', p_schema, p_table
             USING ERRCODE = 'TG202', HINT = 'tgsis.disable_versioning makes a versioned table plain and forgets it';
     END IF;

@@ -25,7 +25,7 @@ LANGUAGE plpgsql
 VOLATILE
 AS $$
 DECLARE
-    v_table   text := format('%I.%I', p_t.schemaname, p_t.tablename || '_ver');
+    v_table   text := tgsis.storage_table(p_t.schemaname, p_t.tablename);  -- <table>_ver, or tgsis.<table>_chunk
     v_count   bigint;
     v_busy    text[];
     v_timeout text := current_setting('lock_timeout');

@@ -16,11 +16,11 @@ BEGIN
                a.atttypid AS keytypid
           FROM tgsis.versioned_tables t
           JOIN pg_catalog.pg_attribute a
-            ON a.attrelid = format('%I.%I', t.schemaname, t.tablename || '_ver')::regclass AND a.attname = t.objectkeyfield
+            ON a.attrelid = tgsis.storage_table(t.schemaname, t.tablename)::regclass AND a.attname = t.objectkeyfield
          WHERE t.objectclass = p_objectclass
     LOOP
         v_row := v_t.tbl;
-        PERFORM tgsis.check_key_type(format('%I.%I', v_t.schemaname, v_t.tablename || '_ver')::regclass, v_t.objectkeyfield);
+        PERFORM tgsis.check_key_type(tgsis.storage_table(v_t.schemaname, v_t.tablename)::regclass, v_t.objectkeyfield);
         -- the keys cast to the column's type, so that the key index serves the lookup;
         -- a key that is no value of that type ('abc' for a bigint key) is a bad argument
         FOREACH v_key IN ARRAY coalesce(p_keys, '{}') LOOP
@@ -36,9 +36,9 @@ BEGIN
         END LOOP;
         -- read as the storage's owner from definer code (tgsis.storage_run)
         SELECT r INTO v_some FROM tgsis.storage_run(v_row, false, format(
-            'SELECT coalesce(array_agg(DISTINCT %5$s), ''{}'') FROM %2$I.%3$I v
+            'SELECT coalesce(array_agg(DISTINCT %5$s), ''{}'') FROM %2$s v
               WHERE v.%1$I = ANY ($1::%4$s[]) AND v.revision = ANY ($2) AND NOT (v.lastrevs && $2)',
-            v_t.objectkeyfield, v_t.schemaname, v_t.tablename || '_ver', v_t.keytype,
+            v_t.objectkeyfield, tgsis.storage_table(v_t.schemaname, v_t.tablename), NULL, v_t.keytype,
             tgsis.object_key_sql(v_t.keytypid, format('v.%I', v_t.objectkeyfield))), p_keys, p_revisions) AS r;
         v_found := v_found || v_some;
     END LOOP;

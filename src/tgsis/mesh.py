@@ -33,6 +33,7 @@ import numpy as np
 import numpy.typing as npt
 
 from tgsis._conversions import installed as _conversions
+from tgsis._vertex_metadata import renumbered, vertex_indices
 from tgsis.errors import InvalidGeometryError, InvalidPropertyError
 
 __all__ = [
@@ -696,16 +697,8 @@ def morton_codes(points: npt.ArrayLike) -> npt.NDArray[np.uint64]:
     return codes
 
 
-def _vertex_list(value: Any, n: int, key: str, name: str | None) -> IntArray:
-    """A metadata list of vertex indices as int64, each in 0..n-1 (else the metadata cannot be renumbered)."""
-    array = np.asarray(value if isinstance(value, (list, tuple)) else [None])
-    if array.size and (array.dtype.kind not in "iu" or int(array.min()) < 0 or int(array.max()) >= n):
-        raise InvalidGeometryError(
-            f"metadata[{key!r}] of {name or 'the mesh'} holds something else than vertex indices 0..{n - 1}: "
-            "it cannot be renumbered in the spatial order",
-            hint="correct or remove that metadata entry, or keep the file's order",
-        )
-    return array.astype(np.int64).reshape(-1) if array.size else np.empty(0, dtype=np.int64)
+_SPATIAL = "it cannot be renumbered in the spatial order"
+_SPATIAL_HINT = "correct or remove that metadata entry, or keep the file's order"
 
 
 def _renumbered_metadata(mesh: Mesh, new_of_old: IntArray) -> dict[str, Any]:
@@ -713,46 +706,18 @@ def _renumbered_metadata(mesh: Mesh, new_of_old: IntArray) -> dict[str, Any]:
     n, name = mesh.n_vertices, mesh.name
     meta = dict(mesh.metadata)
     if "gocad_atoms" in meta:
-        pairs = _vertex_list(meta["gocad_atoms"], n, "gocad_atoms", name)
+        pairs = vertex_indices(meta["gocad_atoms"], n, "gocad_atoms", name, _SPATIAL, _SPATIAL_HINT)
         if len(pairs) % 2:
             raise InvalidGeometryError(f"metadata['gocad_atoms'] of {name or 'the mesh'} is not a list of pairs")
-        renumbered = new_of_old[pairs.reshape(-1, 2)]
-        renumbered = renumbered[np.argsort(renumbered[:, 0], kind="stable")]
-        meta["gocad_atoms"] = [[int(a), int(r)] for a, r in renumbered]
+        new_pairs = new_of_old[pairs.reshape(-1, 2)]
+        new_pairs = new_pairs[np.argsort(new_pairs[:, 0], kind="stable")]
+        meta["gocad_atoms"] = [[int(a), int(r)] for a, r in new_pairs]
     if "gocad_patoms" in meta:
         meta["gocad_patoms"] = sorted(
-            int(v) for v in new_of_old[_vertex_list(meta["gocad_patoms"], n, "gocad_patoms", name)]
+            int(v)
+            for v in new_of_old[vertex_indices(meta["gocad_patoms"], n, "gocad_patoms", name, _SPATIAL, _SPATIAL_HINT)]
         )
-    flags = meta.get("gocad_vertex_flags")
-    if isinstance(flags, dict) and flags:
-        result: dict[str, list[list[int]]] = {}
-        for flag, ranges in flags.items():
-            flat = _vertex_list(ranges, n + 1, "gocad_vertex_flags", name)
-            bounds = flat.reshape(-1, 2) if len(flat) % 2 == 0 else np.empty((0, 2), dtype=np.int64)
-            if len(bounds) * 2 != len(flat) or bool((bounds[:, 0] > bounds[:, 1]).any()):
-                raise InvalidGeometryError(
-                    f"metadata['gocad_vertex_flags'] of {name or 'the mesh'} holds something else than "
-                    f"[start, stop] ranges of vertex indices 0..{n}: it cannot be renumbered in the spatial order",
-                    hint="correct or remove that metadata entry, or keep the file's order",
-                )
-            depth = np.zeros(n + 1, dtype=np.int64)  # ranges may overlap: count how many cover each vertex
-            np.add.at(depth, bounds[:, 0], 1)
-            np.add.at(depth, bounds[:, 1], -1)
-            has = np.cumsum(depth)[:n] > 0
-            where = np.sort(new_of_old[has])
-            if len(where) == 0:
-                continue
-            breaks = np.flatnonzero(np.diff(where) != 1) + 1
-            starts = np.concatenate([where[:1], where[breaks]])
-            stops = np.concatenate([where[breaks - 1], where[-1:]]) + 1
-            result[flag] = [[int(a), int(b)] for a, b in zip(starts, stops)]
-        meta["gocad_vertex_flags"] = result
-    nodes = meta.get("gocad_property_control_nodes")
-    if isinstance(nodes, dict):
-        meta["gocad_property_control_nodes"] = {
-            key: sorted(int(v) for v in new_of_old[_vertex_list(values, n, "gocad_property_control_nodes", name)])
-            for key, values in nodes.items()
-        }
+    meta = renumbered(meta, n, new_of_old, name, _SPATIAL, _SPATIAL_HINT)  # flags and control nodes
     meta["vertex_order"] = "spatial"
     return meta
 

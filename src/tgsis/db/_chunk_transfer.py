@@ -40,13 +40,17 @@ import psycopg
 from psycopg import sql
 
 from tgsis._chunks import CHUNK_SIZE, COPY_SIGNATURE, ChunkColumns, ChunkSet, encode, from_copy, to_copy
-from tgsis.db._transfer import Storage, one_snapshot, read_only_snapshot, staged
+from tgsis.db._transfer import Packed, PartRequest, Storage, one_snapshot, read_only_snapshot, staged
 from tgsis.errors import AlreadyExistsError, InvalidInputError, NotFoundError
 
 __all__ = [
     "ChunkTable",
     "ObjectRows",
     "chunk_table",
+    "chunked_tables",
+    "PackedChunks",
+    "rows_request",
+    "records_as_copy",
     "upload_chunks",
     "download_chunks",
     "download_tables",
@@ -110,6 +114,20 @@ class ObjectRows:
         if len({v.dtype for v in values}) > 1:
             raise InvalidInputError(f"columns {list(self.columns)} differ in type: take them one by one")
         return np.stack(values, axis=1) if values else np.empty((len(self.ids), 0))
+
+
+def chunked_tables(conn: Conn) -> frozenset[str]:
+    """The model tables whose rows are stored in chunks (``tgsis.stored_in_chunks``): their bulk paths take chunks.
+
+    Returns
+    -------
+    frozenset of str
+        Row table names (``vrtx``, ``trgl``, ...) of ``tgsis.model_tables`` stored in chunks; empty while rows are.
+    """
+    rows = conn.execute(
+        "SELECT tablename::text FROM tgsis.model_tables WHERE chunkcolumn IS NOT NULL AND tgsis.stored_in_chunks(tablename)"
+    ).fetchall()
+    return frozenset(str(r[0]) for r in rows)
 
 
 def chunk_table(conn: Conn, table: str) -> ChunkTable:
@@ -428,3 +446,142 @@ def _side_copy(
             )
         payload = _copy_out(side, chunk_copy_query(layout, geoids, revisions)) if geoids else b""
     return layout.table, payload, geoids
+
+
+@dataclass(frozen=True)
+class PackedChunks:
+    """A chunk table's part of :func:`~tgsis.db._transfer.columns_out_all`: an object's rows, read from its chunks.
+
+    What a :class:`~tgsis.db._transfer.Packed` request of ``tgsis.<table>`` gives (``[geoid, ids,
+    *columns]``, rows in no order), from the chunk versions the session sees (:func:`download_chunks`'s
+    test), in the same query as the other parts (one snapshot, whatever the isolation level). Per object
+    the server sends its chunk rows as ``record_send`` values joined into one ``bytea``
+    (:func:`records_as_copy` makes them a binary COPY stream for :func:`~tgsis._chunks.from_copy`).
+
+    Attributes
+    ----------
+    layout : ChunkTable
+    geoids : sequence of int
+    columns : sequence of str
+        The row table's columns wanted after ``geoid``: the local id (its chunk column, e.g. ``vrtxid``)
+        first, then array columns of the chunk table, in any order.
+    """
+
+    layout: ChunkTable
+    geoids: Sequence[int]
+    columns: Sequence[str]
+
+    def __post_init__(self) -> None:
+        unknown = [c for c in self.columns[1:] if c not in self.layout.columns.names]
+        if not self.columns or unknown:
+            raise InvalidInputError(
+                f"tgsis.{self.layout.table}_chunk has no arrays {unknown} (it has {list(self.layout.columns.names)})"
+            )
+
+    @property
+    def source(self) -> sql.Composed:
+        """The relation read: ``tgsis.<table>_chunk`` (as :attr:`Packed.source <tgsis.db._transfer.Packed>`)."""
+        return self.layout.relation
+
+    def query(self, part: int) -> sql.Composed:
+        """The rows ``(part, geoid, chunk rows, their record_send values joined)``: one per object with chunks."""
+        record = sql.SQL("record_send(ROW({}))").format(
+            sql.SQL(", ").join(sql.SQL("c.{}").format(sql.Identifier(c)) for c in self.layout.columns.select_columns())
+        )
+        visible = _visible(self.layout)
+        if len(self.geoids) == 1:
+            return sql.SQL(
+                "SELECT {part}::int4, {geoid}::int8, count(*), string_agg({record}, ''::bytea) FROM {source} c "
+                "WHERE c.geoid = {geoid} AND {visible}"
+            ).format(
+                part=sql.Literal(part),
+                geoid=sql.Literal(int(self.geoids[0])),
+                record=record,
+                source=self.layout.relation,
+                visible=visible,
+            )
+        return sql.SQL(
+            "SELECT {part}::int4, g.k, a.n, a.v FROM (SELECT DISTINCT unnest({geoids}::int8[]) AS k) g "
+            "CROSS JOIN LATERAL (SELECT count(*) AS n, string_agg({record}, ''::bytea) AS v FROM {source} c "
+            "WHERE c.geoid = g.k AND {visible}) a"
+        ).format(
+            part=sql.Literal(part),
+            geoids=sql.Literal([int(g) for g in self.geoids]),
+            record=record,
+            source=self.layout.relation,
+            visible=visible,
+        )
+
+    def decode(self, conn: Conn, groups: Sequence[tuple[int, int, bytes]]) -> list[npt.NDArray[Any]]:
+        """``[geoid, ids, *columns]`` (n,) each from the objects' ``(geoid, chunk rows, record_send values)``."""
+        spec = self.layout.columns
+        objects = [_rows(geoid, from_copy(records_as_copy(data, count), spec), spec) for geoid, count, data in groups]
+        counts = [len(o.ids) for o in objects]
+        geoids = np.repeat(np.asarray([o.geoid for o in objects], dtype=np.int64), counts)
+        ids = np.concatenate([np.empty(0, dtype=np.int64), *(o.ids for o in objects)])
+        values = [
+            np.concatenate(
+                [np.empty(0, dtype=np.int64 if name in spec.refs else np.float64), *(o.columns[name] for o in objects)]
+            )
+            for name in self.columns[1:]
+        ]
+        return [geoids, ids, *values]
+
+
+def rows_request(
+    conn: Conn, table: str, columns: Sequence[tuple[str, str]], geoids: Sequence[int], chunked: frozenset[str]
+) -> PartRequest:
+    """A model table's part of :func:`~tgsis.db._transfer.columns_out_all`: from its chunks when it is stored in them.
+
+    Parameters
+    ----------
+    table : str
+        A model-1 table of ``tgsis`` keyed by ``geoid`` (``vrtx``, ``trgl``, ...).
+    columns : sequence of (str, str)
+        ``(name, wire type)`` after ``geoid``: the local id first.
+    geoids : sequence of int
+    chunked : frozenset of str
+        :func:`chunked_tables`.
+
+    Returns
+    -------
+    Packed or PackedChunks
+        The rows of the face ``tgsis.<table>`` (rows storage), or of ``tgsis.<table>_chunk``.
+    """
+    if table in chunked:
+        return PackedChunks(chunk_table(conn, table), geoids, [name for name, _ in columns])
+    return Packed(sql.SQL("tgsis.{}").format(sql.Identifier(table)), "geoid", columns, geoids)
+
+
+def records_as_copy(data: bytes, count: int) -> bytes:
+    """``count`` joined ``record_send`` values as one binary COPY stream of their rows (header, rows, trailer).
+
+    A ``record_send`` value is ``int4`` fields, then per field its type's oid, length and bytes; a COPY row is
+    ``int2`` fields, then per field its length and bytes. Walks the fields (a few per chunk row).
+
+    Raises
+    ------
+    InvalidInputError
+        The values end inside a record, or bytes are left after ``count`` records.
+    """
+    view = memoryview(data)
+    out: list[Any] = [COPY_SIGNATURE + bytes(8)]  # flags 0, no header extension
+    pos = 0
+    try:
+        for _ in range(count):
+            fields = int.from_bytes(view[pos : pos + 4], "big", signed=True)
+            out.append(fields.to_bytes(2, "big", signed=True))
+            pos += 4
+            for _ in range(fields):
+                length = int.from_bytes(view[pos + 4 : pos + 8], "big", signed=True)
+                end = pos + 8 + max(length, 0)
+                if end > len(view):
+                    raise IndexError
+                out.append(view[pos + 4 : end])
+                pos = end
+    except (IndexError, OverflowError):
+        raise InvalidInputError("chunk records end inside a record") from None
+    if pos != len(view):
+        raise InvalidInputError(f"{len(view) - pos} bytes after {count} chunk records")
+    out.append(b"\xff\xff")
+    return b"".join(out)

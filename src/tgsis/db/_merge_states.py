@@ -243,15 +243,24 @@ def _readable_storages(conn: Conn, tables: list[_Table]) -> list[str] | None:
     """Each table's storage (``tgsis.storage_table``: quoted) when all are versioned with the object key read here
     and the role may read them; else None.
 
+    A table stored in chunks (``tgsis.stored_in_chunks``) is read through its
+    decoded view ``tgsis.<table>_chunk_rows``: the rows of every chunk version
+    with the version's ``revision``, ``lastrevs`` and ``revclosed``, which the
+    readers here filter as they filter row versions. A chunk version written
+    or closed in a revision carries all its rows: the change read is the
+    changed chunks' rows, a superset of the changed rows, which the patching
+    and the merge tell apart by key and content as they do a rewritten row.
+
     A role that may read a view but not its storage (a grant made on the
     view only) reads as before: three full reads through the views.
     """
     rows = conn.execute(
-        "SELECT tgsis.storage_table(k.schemaname, k.tablename) AS storage,"
-        "       t.objectkeyfield IS NOT DISTINCT FROM k.key"
-        "       AND has_table_privilege(tgsis.storage_table(k.schemaname, k.tablename), 'SELECT')"
+        "SELECT s.storage, t.objectkeyfield IS NOT DISTINCT FROM k.key AND has_table_privilege(s.storage, 'SELECT')"
         "  FROM unnest(%s::text[], %s::text[], %s::text[]) WITH ORDINALITY AS k(schemaname, tablename, key, n)"
         "  LEFT JOIN tgsis.versioned_tables t ON t.schemaname = k.schemaname AND t.tablename = k.tablename"
+        "  CROSS JOIN LATERAL (SELECT CASE WHEN k.schemaname = 'tgsis' AND tgsis.stored_in_chunks(k.tablename)"
+        "                                  THEN format('tgsis.%%I', k.tablename || '_chunk_rows')"
+        "                                  ELSE tgsis.storage_table(k.schemaname, k.tablename) END AS storage) s"
         " ORDER BY k.n",
         ([t.schema for t in tables], [t.view for t in tables], [t.key for t in tables]),
     ).fetchall()

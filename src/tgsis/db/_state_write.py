@@ -26,6 +26,7 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
+from tgsis.db._chunk_write import stored_in_chunks, write_object_rows
 from tgsis.db._cube import box_corners, cube_name
 from tgsis.db._static import SIMPLEX, copy_extra_rows, part_rows
 from tgsis.db._transfer import Storage
@@ -40,6 +41,7 @@ __all__ = [
     "delete_rows",
     "key_codes",
     "update_geometry_row",
+    "write_model_rows",
     "write_sliced_difference",
     "write_state_difference",
     "write_state_rows",
@@ -415,6 +417,46 @@ def copy_cell_rows(
     return len(ids)
 
 
+def write_model_rows(
+    conn: Conn,
+    storage: Storage,
+    table: str,
+    idfield: str,
+    geoid: int,
+    gone: IntArray,
+    ids: IntArray,
+    values: npt.NDArray[Any],
+) -> tuple[int, int]:
+    """Write one model-1 table's difference of one object: rows ``gone`` (d,) go, rows ``ids`` (n,) are written.
+
+    ``values`` (n, k): the vertices' coordinates (``vrtx``) or the cells'
+    vertex ids (a simplex table). An id may be in both (a row rewritten: a
+    moved vertex). Rows: ``gone`` deleted (closed, when versioned), then the
+    rows COPied. A table stored in chunks (``tgsis.stored_in_chunks``): one
+    call of ``tgsis.write_object_rows`` for both, each touched chunk rewritten
+    once (:mod:`tgsis.db._chunk_write`). Returns (rows deleted or closed, rows
+    written), counted alike on both storages.
+    """
+    gone = np.asarray(gone, dtype=np.int64)
+    ids = np.asarray(ids, dtype=np.int64)
+    if stored_in_chunks(conn, table):
+        vertices = table == "vrtx"
+        write_object_rows(
+            conn,
+            table,
+            geoid,
+            np.setdiff1d(gone, ids),
+            ids,
+            floats=values if vertices else None,
+            refs=None if vertices else values,
+        )
+        return len(gone), len(ids)
+    deleted = delete_rows(conn, "tgsis", table, "geoid", geoid, idfield, gone)
+    if table == "vrtx":
+        return deleted, copy_vertex_rows(conn, storage, geoid, ids, values)
+    return deleted, copy_cell_rows(conn, storage, table, idfield, geoid, ids, values)
+
+
 def write_state_rows(
     conn: Conn, fc: FeatureClass, geoid: int, old: MeshState, new: MeshState, *, whole: bool = True
 ) -> tuple[int, int, int]:
@@ -433,10 +475,13 @@ def write_state_rows(
     deleted, inserted = _write_properties(conn, fc, geoid, old, new, storage)
     gone_c, fresh_c = _row_difference(old.cell_ids, old.cells, new.cell_ids, new.cells)
     gone_v, fresh_v = _row_difference(old.vertex_ids, old.vertices, new.vertex_ids, new.vertices)
-    deleted += delete_rows(conn, "tgsis", table, "geoid", geoid, idfield, gone_c)
-    deleted += delete_rows(conn, "tgsis", "vrtx", "geoid", geoid, "vrtxid", gone_v)
-    inserted += copy_vertex_rows(conn, storage, geoid, new.vertex_ids[fresh_v], new.vertices[fresh_v])
-    inserted += copy_cell_rows(conn, storage, table, idfield, geoid, new.cell_ids[fresh_c], new.cells[fresh_c])
+    for gone, added in (
+        write_model_rows(conn, storage, table, idfield, geoid, gone_c, new.cell_ids[fresh_c], new.cells[fresh_c]),
+        write_model_rows(
+            conn, storage, "vrtx", "vrtxid", geoid, gone_v, new.vertex_ids[fresh_v], new.vertices[fresh_v]
+        ),
+    ):
+        deleted, inserted = deleted + gone, inserted + added
     for gone, added in (_write_atoms(conn, geoid, old, new, storage), _write_parts(conn, fc, geoid, old, new, storage)):
         deleted, inserted = deleted + gone, inserted + added
     if not whole:

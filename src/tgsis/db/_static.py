@@ -17,8 +17,10 @@ import psycopg
 from psycopg import sql
 
 from tgsis.arguments import no_nul
+from tgsis.db._chunk_transfer import ObjectRows, chunked_tables, rows_request, upload_chunks
 from tgsis.db._transfer import (
     Packed,
+    PartRequest,
     Storage,
     columns_out_all,
     concat,
@@ -165,22 +167,43 @@ def copy_meshes(
         xyz = xyz.copy()
         flip = np.repeat([meaning.depth for meaning in meanings], [m.n_vertices for m in meshes])
         xyz[flip, 2] = -xyz[flip, 2]  # exact: only the sign bit changes
-    storage.copy(
-        conn,
-        "tgsis",
-        "vrtx",
-        [
-            ("geoid", vertex_geoids, "int8"),
-            ("vrtxid", vertex_ids, "int8"),
-            ("x", xyz[:, 0], "float8"),
-            ("y", xyz[:, 1], "float8"),
-            ("z", xyz[:, 2], "float8"),
-        ],
-    )
+    chunked = chunked_tables(conn)
+    if "vrtx" in chunked:  # the chunks of every mesh in one COPY (docs/storage.md, "What each bulk path does")
+        starts = np.cumsum([0, *(m.n_vertices for m in meshes)])
+        upload_chunks(
+            conn,
+            "vrtx",
+            [
+                ObjectRows(
+                    geoid,
+                    np.arange(m.n_vertices, dtype=np.int64),
+                    {name: xyz[starts[i] : starts[i + 1], j] for j, name in enumerate(("x", "y", "z"))},
+                )
+                for i, (geoid, m) in enumerate(zip(geoids, meshes))
+            ],
+            storage,
+        )
+    else:
+        storage.copy(
+            conn,
+            "tgsis",
+            "vrtx",
+            [
+                ("geoid", vertex_geoids, "int8"),
+                ("vrtxid", vertex_ids, "int8"),
+                ("x", xyz[:, 0], "float8"),
+                ("y", xyz[:, 1], "float8"),
+                ("z", xyz[:, 2], "float8"),
+            ],
+        )
     for geotype in dict.fromkeys(m.geotype for m in meshes):  # each simplex table once, in member order
         group = [i for i, m in enumerate(meshes) if m.geotype == geotype]
         table, key = SIMPLEX[geotype]
         k = meshes[group[0]].cell_size
+        rows = [simplex_rows(geoids[i], meshes[i], table) for i in group]  # checked on both paths
+        if table in chunked:
+            upload_chunks(conn, table, rows, storage)
+            continue
         cell_geoids, cell_ids = row_keys([geoids[i] for i in group], [meshes[i].n_cells for i in group])
         cells = concat([meshes[i].cells for i in group])
         storage.copy(
@@ -221,6 +244,33 @@ def copy_meshes(
                 ],
             )
     copy_extras(conn, fc, geoids, meshes, meanings, storage)
+
+
+def simplex_rows(geoid: int, mesh: Mesh, table: str) -> ObjectRows:
+    """A mesh's simplices as the rows of its chunked simplex table: ids 0..m-1, one corner column per vertex.
+
+    Checks what the row table's CHECK checks on every row (``<table>_distinct_vertices``: a cell names k
+    distinct vertices), which a mesh changed after it was made may break: the chunk upload has no such
+    CHECK, and the row upload's would fail with a raw ``23514``.
+
+    Raises
+    ------
+    InvalidGeometryError
+        A cell names one vertex twice (nothing is written).
+    """
+    cells = np.asarray(mesh.cells, dtype=np.int64)
+    k = mesh.cell_size
+    repeated = np.zeros(len(cells), dtype=bool)
+    for i in range(k):
+        for j in range(i + 1, k):
+            repeated |= cells[:, i] == cells[:, j]
+    if repeated.any():
+        row = int(np.flatnonzero(repeated)[0])
+        raise InvalidGeometryError(
+            f"geometry {geoid}: {mesh.cell_name} {row} uses a vertex twice: {cells[row].tolist()}",
+            detail=f"{int(repeated.sum())} cells repeat a vertex (tgsis.{table}: {table}_distinct_vertices)",
+        )
+    return ObjectRows(geoid, np.arange(len(cells), dtype=np.int64), {f"vrtxid{j + 1}": cells[:, j] for j in range(k)})
 
 
 def extra_rows(
@@ -402,15 +452,15 @@ def download(conn: Conn, fc: FeatureClass, parts: Mapping[int, Part]) -> Downloa
     One query (:func:`columns_out_all`): the vertices, the simplices of each
     geotype and each property table are its parts, each giving a geometry's
     column as one binary value, which the server may compute side by side;
-    a bounded number of parts whatever the number of geometries.
+    a bounded number of parts whatever the number of geometries. A table
+    stored in chunks gives its chunk rows (:func:`rows_request`), decoded
+    here: one statement, so one snapshot in any isolation level.
     """
     id_list = sql.Literal(list(parts))
-    requests = [
-        Packed(
-            sql.SQL("tgsis.vrtx"),
-            "geoid",
-            [("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")],
-            list(parts),
+    chunked = chunked_tables(conn)
+    requests: list[PartRequest] = [
+        rows_request(
+            conn, "vrtx", [("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")], list(parts), chunked
         )
     ]
     geotypes = list(dict.fromkeys(part.geotype for part in parts.values()))
@@ -418,14 +468,7 @@ def download(conn: Conn, fc: FeatureClass, parts: Mapping[int, Part]) -> Downloa
         table, key = SIMPLEX[geotype]
         cell_cols = [f"vrtxid{i + 1}" for i in range(mesh_class(geotype).cell_size)]
         group = [g for g, part in parts.items() if part.geotype == geotype]
-        requests.append(
-            Packed(
-                sql.SQL("tgsis.{}").format(sql.Identifier(table)),
-                "geoid",
-                [(c, "int8") for c in (key, *cell_cols)],
-                group,
-            )
-        )
+        requests.append(rows_request(conn, table, [(c, "int8") for c in (key, *cell_cols)], group, chunked))
     property_keys: list[tuple[str, tuple[str, ...]]] = []
     for alignment in ("VERTEX", "CELL"):  # one part per property table (and set of properties)
         props, protable = fc.aligned(alignment), fc.property_table(alignment)
@@ -505,7 +548,7 @@ def restore_extras(
         pairs = [(int(a), int(r)) for a, r in positions]
         patoms = [int(a) for (a, _), p in zip(positions, flags[found]) if p]
     if file_convention:
-        restore_meaning(mesh, part.zpositive, part.crs, part.color, part.metadata, pairs, patoms)
+        restore_meaning(mesh, part.zpositive, part.crs, part.color, part.metadata, pairs, patoms, vertex_ids)
     elif pairs:
         mesh.metadata = {**mesh.metadata, "gocad_atoms": [list(p) for p in pairs]}
         if patoms:

@@ -17,7 +17,7 @@ import json
 import logging
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 import numpy.typing as npt
@@ -505,6 +505,19 @@ SEND_FUNCTIONS = {
 }
 
 
+class PartRequest(Protocol):
+    """A part of :func:`columns_out_all`'s one query: :class:`Packed` rows, or a chunk table's rows
+    (:class:`tgsis.db._chunk_transfer.PackedChunks`)."""
+
+    def query(self, part: int) -> sql.Composed:
+        """The rows ``(part int4, geoid int8, count int8, packed bytea)``: one per geometry that has rows here."""
+        ...
+
+    def decode(self, conn: Conn, groups: Sequence[tuple[int, int, bytes]]) -> list[npt.NDArray[Any]]:
+        """The columns ``[geoid, *columns]`` (rows in no order) from its geometries' ``(geoid, count, packed)``."""
+        ...
+
+
 @dataclass(frozen=True)
 class Packed:
     """One request of :func:`columns_out_all`: the rows of ``source`` whose ``key`` is one of ``geoids``.
@@ -551,8 +564,12 @@ class Packed:
             geoids=sql.Literal([int(g) for g in self.geoids]),
         )
 
+    def decode(self, conn: Conn, groups: Sequence[tuple[int, int, bytes]]) -> list[npt.NDArray[Any]]:
+        """The columns ``[geoid, *columns]`` from the rows of :meth:`query` (:class:`PartRequest`)."""
+        return _decode_groups(conn, self, groups)
 
-def columns_out_all(conn: Conn, requests: Sequence[Packed]) -> list[list[npt.NDArray[Any]]]:
+
+def columns_out_all(conn: Conn, requests: Sequence[PartRequest]) -> list[list[npt.NDArray[Any]]]:
     """The rows of several :class:`Packed` requests, as columns: ``[key, *columns]`` for each.
 
     The rows stay rows in storage, but do not travel one by one: the server
@@ -571,9 +588,11 @@ def columns_out_all(conn: Conn, requests: Sequence[Packed]) -> list[list[npt.NDA
 
     Parameters
     ----------
-    requests : sequence of Packed
+    requests : sequence of Packed (or other :class:`PartRequest`)
         The tables and geometries. A row with a NULL (the concatenation is
-        NULL and the aggregate skips it) is reported, not dropped.
+        NULL and the aggregate skips it) is reported, not dropped. A table
+        stored in chunks is read by its chunks
+        (:class:`tgsis.db._chunk_transfer.PackedChunks`), in the same query.
 
     Returns
     -------
@@ -594,7 +613,7 @@ def columns_out_all(conn: Conn, requests: Sequence[Packed]) -> list[list[npt.NDA
         for part, geoid, count, data in cursor.execute(query).fetchall():
             if count:
                 groups[part].append((int(geoid), int(count), data or b""))
-    return [_decode_groups(conn, request, found) for request, found in zip(requests, groups, strict=True)]
+    return [request.decode(conn, found) for request, found in zip(requests, groups, strict=True)]
 
 
 def columns_out(

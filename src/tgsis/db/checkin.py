@@ -41,15 +41,17 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
+from tgsis._vertex_metadata import renumbered
 from tgsis.arguments import checked
 from tgsis.compare import MeshDiff, MeshIndex, compare_meshes
+from tgsis.db._chunk_write import next_id as next_chunk_id
+from tgsis.db._chunk_write import stored_in_chunks
 from tgsis.db._settings import read_version_settings, restore_version_settings
 from tgsis.db._state_write import (
     PART_PROPERTY,
-    copy_cell_rows,
-    copy_vertex_rows,
     delete_rows,
     update_geometry_row,
+    write_model_rows,
     write_state_rows,
 )
 from tgsis.db._static import (
@@ -283,6 +285,8 @@ def _same_values(a: npt.NDArray[Any], b: npt.NDArray[Any]) -> npt.NDArray[np.boo
 
 def _next_id(conn: Conn, storage: Storage, table: str, key: str, idfield: str, geoid: int) -> int:
     """The first id above every id the object has ever had in ``table`` (every row version when versioned)."""
+    if stored_in_chunks(conn, table):
+        return next_chunk_id(conn, table, idfield, geoid)
     row = conn.execute(
         sql.SQL("SELECT max({}) FROM {} WHERE {} = %s").format(
             sql.Identifier(idfield), storage.table("tgsis", table), sql.Identifier(key)
@@ -386,33 +390,48 @@ def _write_diff(
             )
             inserted += len(rewrite)
 
-    deleted += delete_rows(conn, "tgsis", table, "geoid", geoid, idfield, stored.cell_ids[plan.removed_cells])
-    deleted += delete_rows(
-        conn,
-        "tgsis",
-        "vrtx",
-        "geoid",
-        geoid,
-        "vrtxid",
-        np.concatenate([stored.vertex_ids[plan.removed_vertices], vertex_ids[moved]]),
-    )
     written_v = np.concatenate([moved, added_v])
-    inserted += copy_vertex_rows(conn, storage, geoid, vertex_ids[written_v], edited.vertices[written_v])
-    inserted += copy_cell_rows(
-        conn,
-        storage,
-        table,
-        idfield,
-        geoid,
-        cell_ids[added_c],
-        vertex_ids[edited.cells[added_c]].reshape(-1, edited.cell_size),
-    )
+    for gone, added in (
+        write_model_rows(
+            conn,
+            storage,
+            table,
+            idfield,
+            geoid,
+            stored.cell_ids[plan.removed_cells],
+            cell_ids[added_c],
+            vertex_ids[edited.cells[added_c]].reshape(-1, edited.cell_size),
+        ),
+        write_model_rows(
+            conn,
+            storage,
+            "vrtx",
+            "vrtxid",
+            geoid,
+            np.concatenate([stored.vertex_ids[plan.removed_vertices], vertex_ids[moved]]),
+            vertex_ids[written_v],
+            edited.vertices[written_v],
+        ),
+    ):
+        deleted, inserted = deleted + gone, inserted + added
     return _Written(vertex_ids, cell_ids, cell_values, deleted, inserted, changes)
 
 
-def _meaning_columns(edited: Mesh) -> list[tuple[str, str, Any]]:
-    """(column of ``tgsis.geometry``, placeholder, value) of what the edited mesh's metadata says of its file's meaning."""
+def _meaning_columns(edited: Mesh, vertex_ids: IntArray) -> list[tuple[str, str, Any]]:
+    """(column of ``tgsis.geometry``, placeholder, value) of what the edited mesh's metadata says of its file's meaning.
+
+    ``vertex_ids`` (n,) int64: the id each vertex of ``edited`` is stored under. The metadata's vertex flags
+    and control nodes name vertices by place in ``edited``; they are stored by id (``tgsis._vertex_metadata``),
+    as atoms are, so that they name the same vertices once a download gives the vertices in id order.
+    """
     meaning = meaning_of(edited, "the edited mesh")
+    if meaning.metadata is not None:
+        meaning = replace(
+            meaning,
+            metadata=renumbered(
+                meaning.metadata, edited.n_vertices, vertex_ids, edited.name, "its vertices cannot be stored by id"
+            ),
+        )
     meta = edited.metadata
     columns: list[tuple[str, str, Any]] = []
     if "zpositive" in meta:
@@ -422,8 +441,18 @@ def _meaning_columns(edited: Mesh) -> list[tuple[str, str, Any]]:
     if meaning.color is not None:
         columns += [(c, "%s::real", v) for c, v in zip(("colorred", "colorgreen", "colorblue"), meaning.color)]
     if meaning.metadata is not None:
-        columns.append(("metadata", "%s::jsonb", meaning.metadata_json()))
+        # the order of the stored ids (metadata["vertex_order"], set by an upload in the spatial order) is the
+        # database's, not the file's: a file written by difference keeps the stored ids, so it keeps the label
+        holder = "%s::jsonb" if "vertex_order" in meaning.metadata else _KEEP_VERTEX_ORDER
+        columns.append(("metadata", holder, meaning.metadata_json()))
     return columns
+
+
+#: the edited metadata, with the stored row's "vertex_order" (read where the column ``metadata`` is tgsis.geometry's)
+_KEEP_VERTEX_ORDER = (
+    "(%s::jsonb || CASE WHEN metadata ? 'vertex_order' "
+    "THEN jsonb_build_object('vertex_order', metadata -> 'vertex_order') ELSE '{}'::jsonb END)"
+)
 
 
 _MEANING_WORDS = {
@@ -441,7 +470,7 @@ def _meaning_not_applied(conn: Conn, fc: FeatureClass, geoid: int, edited: Mesh,
     of :data:`_MEANING_WORDS`, and ``GOCAD atoms``; compared as a plain check-in would write them, but a
     coordinate system or metadata where none is stored (what a file format adds by itself)."""
     differ: list[str] = []
-    for column, holder, value in _meaning_columns(edited):
+    for column, holder, value in _meaning_columns(edited, vertex_ids):
         # a coordinate system or metadata the database never had: the file format's defaults (a GOCAD writer's
         # coordinate system block, its header keys), which tell nothing of an edit
         optional = column in ("crs", "metadata")
@@ -475,7 +504,7 @@ def _update_meaning(conn: Conn, fc: FeatureClass, geoid: int, edited: Mesh, writ
     rows changed.
     """
     meaning = meaning_of(edited, "the edited mesh")
-    columns = _meaning_columns(edited)
+    columns = _meaning_columns(edited, written.vertex_ids)
     changed = 0
     if columns:
         names = [sql.Identifier(c) for c, _, _ in columns]
@@ -959,7 +988,7 @@ def checkout(conn: Conn, feature_id: int, feature_class: str | FeatureClass | No
     )
     checked_out = Checkout(token, base, properties)
     if meaning is not None:  # the mesh to edit is in its file's convention, with its metadata (the base is as stored)
-        restore_meaning(checked_out.mesh, **part_meaning(meaning))
+        restore_meaning(checked_out.mesh, **part_meaning(meaning), vertex_ids=base.vertex_ids)
     checked_out.index()  # hashed now, so that the check-in hashes only the edited mesh
     return checked_out
 

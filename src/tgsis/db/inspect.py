@@ -19,8 +19,9 @@ import psycopg
 from psycopg import sql
 
 from tgsis.arguments import checked
+from tgsis.db._chunk_transfer import chunked_tables, rows_request
 from tgsis.db._cube import box_corners
-from tgsis.db._transfer import columns_out, corners_out
+from tgsis.db._transfer import columns_out, columns_out_all, corners_out
 from tgsis.db.classes import FeatureClass, readable_class_names  # FeatureClass at run time: @checked reads the hints
 from tgsis.errors import NotFoundError, reraise
 
@@ -410,15 +411,11 @@ def static_vertex_rows(
     conn: Conn, geoid: int
 ) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64]]:
     """The stored vertices of static feature ``geoid`` as the working version sees them, in no set order:
-    ``(vrtxid, x, y, z)``, (n,) arrays each, through one packed query (:func:`tgsis.db._transfer.columns_out`)."""
+    ``(vrtxid, x, y, z)``, (n,) arrays each, through one packed query (:func:`tgsis.db._transfer.columns_out`;
+    stored in chunks: the chunks, :class:`tgsis.db._chunk_transfer.PackedChunks`)."""
     with reraise():
-        _, vid, x, y, z = columns_out(
-            conn,
-            sql.SQL("tgsis.vrtx"),
-            "geoid",
-            [("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")],
-            [geoid],
-        )
+        columns = [("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")]
+        _, vid, x, y, z = columns_out_all(conn, [rows_request(conn, "vrtx", columns, [geoid], chunked_tables(conn))])[0]
     return vid, x, y, z
 
 
@@ -428,15 +425,19 @@ def static_triangle_rows(
 ) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64], npt.NDArray[np.int64], npt.NDArray[np.int64]]:
     """The stored triangles of static feature ``geoid``, in no set order: ``(trglid, vrtxid1, vrtxid2, vrtxid3)``."""
     with reraise():
-        _, tid, a, b, c = columns_out(conn, sql.SQL("tgsis.trgl"), "geoid", [("trglid", "int8"), *_CORNERS], [geoid])
+        request = rows_request(conn, "trgl", [("trglid", "int8"), *_CORNERS], [geoid], chunked_tables(conn))
+        _, tid, a, b, c = columns_out_all(conn, [request])[0]
     return tid, a, b, c
 
 
 @checked
 def static_triangle_corners(conn: Conn, geoid: int) -> npt.NDArray[np.int64]:
     """The corners of the stored triangles of static feature ``geoid``, (m, 3) vertex ids, in no set order; packed
-    one value a triangle on the wire (:func:`tgsis.db._transfer.corners_out`), about a third less server time."""
+    one value a triangle on the wire (:func:`tgsis.db._transfer.corners_out`), about a third less server time;
+    stored in chunks, the chunks' relative corners (:func:`static_triangle_rows` without the ids)."""
     with reraise():
+        if "trgl" in chunked_tables(conn):
+            return np.stack(static_triangle_rows(conn, geoid)[1:], axis=1)
         return corners_out(conn, sql.SQL("tgsis.trgl"), "geoid", [name for name, _ in _CORNERS], geoid)
 
 

@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from tgsis._vertex_metadata import places_of_ids
 from tgsis._zpositive import z_convention
 from tgsis.errors import InvalidGeometryError
 from tgsis.mesh import GeometryCollection, Mesh
@@ -197,14 +198,19 @@ def restore_meaning(
     metadata: Mapping[str, Any] | None,
     atoms: Sequence[tuple[int, int]] = (),
     patoms: Sequence[int] = (),
+    vertex_ids: IntArray | None = None,
 ) -> None:
     """Give a mesh read from storage back its file's meaning (in place): z convention, metadata, atoms.
 
-    ``mesh.vertices`` are the stored (elevation) ones; for Depth their z is negated.
+    ``mesh.vertices`` are the stored (elevation) ones; for Depth their z is negated. ``vertex_ids`` (n,)
+    int64 ascending, the ids of the mesh's vertices: the metadata's vertex flags and control nodes, stored by
+    id, become places in the mesh (``tgsis._vertex_metadata.places_of_ids``).
     """
     if zpositive == "Depth" and isinstance(mesh, Mesh):
         mesh.vertices[:, 2] = -mesh.vertices[:, 2]
     meta: dict[str, Any] = dict(metadata or {})
+    if vertex_ids is not None and meta:
+        meta = places_of_ids(meta, vertex_ids, getattr(mesh, "name", None))
     if crs is not None:
         meta["gocad_coordinate_system"] = list(crs)
     if zpositive is not None:

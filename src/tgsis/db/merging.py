@@ -52,6 +52,7 @@ import numpy.typing as npt
 import psycopg
 
 from tgsis._merge_slices import apply_sliced, fixed_period_refusal, merge_sliced, slice_text
+from tgsis._vertex_metadata import CONTROL_NODES, FLAGS, places_of_ids
 from tgsis.arguments import checked
 from tgsis.db._attribute_edits import AttributeEdits, attribute_edits, write_attribute_edits
 from tgsis.db._continuity import check_continuity
@@ -175,8 +176,8 @@ _GOCAD = {1: "vs", 2: "pl", 3: "ts", 4: "so"}
 _SIDES = ("base", "parent", "child")
 _GOCAD_FORMATS = ("tsurf", "pline", "vset", "tsolid")
 #: metadata of the stored object that holds vertex indices of its own state: not valid for the other states
-#: (atoms travel as the vertex property ``refid``)
-_INDEXED_METADATA = ("gocad_atoms", "gocad_patoms")
+#: (atoms travel as the vertex property ``refid``; flags and control nodes are placed in each state by id)
+_INDEXED_METADATA = ("gocad_atoms", "gocad_patoms", FLAGS, CONTROL_NODES)
 
 
 @checked
@@ -225,7 +226,11 @@ def merge_regions_json(merge: MeshMerge | str) -> dict[str, Any]:
 
 
 def _state_mesh(state: MeshState, cell_key: str, name: str | None, metadata: Mapping[str, Any]) -> Mesh:
-    """A state as a tgsis mesh: file vertex i is the i-th stored id ascending (``vrtxid``), cells likewise."""
+    """A state as a tgsis mesh: file vertex i is the i-th stored id ascending (``vrtxid``), cells likewise.
+
+    The vertex flags and control nodes of ``metadata`` are stored by vertex id (``tgsis._vertex_metadata``):
+    each state gets those of its own vertices, at their places in it.
+    """
     if "vrtxid" in state.vertex_properties:
         raise InvalidInputError(f"{state.name} has a vertex property 'vrtxid', the name the export gives the ids")
     if cell_key in state.cell_properties:
@@ -249,7 +254,7 @@ def _state_mesh(state: MeshState, cell_key: str, name: str | None, metadata: Map
             cell_key: state.cell_ids[corder],
         },
         name=name,
-        metadata=metadata,
+        metadata=places_of_ids(metadata, vids, name),
     )
 
 
@@ -267,9 +272,11 @@ def _looks(conn: Conn, version: str, parent: str, feature_id: int) -> tuple[str 
                 mesh = fetch_feature(conn, class_of_feature(conn, feature_id), feature_id).mesh
             except NotFoundError:
                 continue
+            stored = conn.execute("SELECT metadata FROM tgsis.geometry WHERE geoid = %s", (feature_id,)).fetchone()
         if mesh is None:
             continue
-        return mesh.name, {k: v for k, v in mesh.metadata.items() if k not in _INDEXED_METADATA}
+        by_id = {k: v for k, v in ((stored or [None])[0] or {}).items() if k in (FLAGS, CONTROL_NODES)}
+        return mesh.name, {**{k: v for k, v in mesh.metadata.items() if k not in _INDEXED_METADATA}, **by_id}
     return None, {}
 
 

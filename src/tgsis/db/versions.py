@@ -455,6 +455,7 @@ def disable_versioning(conn: Conn, table: str, *, force: bool = False) -> int:
 def storage_table(conn: Conn, schema: str, table: str) -> str:
     """The relation that stores a table's rows, quoted as SQL writes it (``tgsis.storage_table``).
 
+    ``tgsis.<table>_chunk`` when the model table is stored in chunks,
     ``schema.<table>_ver`` when the table is versioned, else the table
     itself; never made in Python, so that it is the name a statement finds.
     """

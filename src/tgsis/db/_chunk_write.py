@@ -1,0 +1,117 @@
+"""Edits of model-1 objects stored in chunks (issue 40): the one client path of check-in, save and merge writes.
+
+Once a model table is switched to chunks (``tgsis.store_in_chunks``:
+``tgsis.stored_in_chunks(table)``), its rows are no longer rows of storage
+that a COPY adds and ``tgsis.delete_object_rows`` closes: an edit names the
+ids that go and the rows that are new or changed, and
+``tgsis.write_object_rows`` rewrites each touched chunk once (closed and
+written anew in the working revision, or in place when it is the working
+revision's), after the checks of today's row path, for the calling role.
+:func:`write_rows` takes either path, so that the callers (``db/_state_write``,
+``db/checkin``) hold one write per table. Private to ``tgsis.db``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+import psycopg
+from psycopg import sql
+
+__all__ = ["stored_in_chunks", "next_id", "write_object_rows"]
+
+Conn = psycopg.Connection[Any]
+IntArray = npt.NDArray[np.int64]
+
+
+def stored_in_chunks(conn: Conn, table: str) -> bool:
+    """Whether the model table ``tgsis.<table>`` is stored in chunks (``tgsis.stored_in_chunks``)."""
+    row = conn.execute("SELECT tgsis.stored_in_chunks(%s)", (table,)).fetchone()
+    return bool(row and row[0])
+
+
+def next_id(conn: Conn, table: str, idfield: str, geoid: int) -> int:
+    """The first local id above every id object ``geoid`` ever had in chunked ``tgsis.<table>`` (every chunk version).
+
+    A chunk version's arrays end at its last present slot, so its last id is
+    ``chunk * chunksize + length - 1`` (of the first array, or of its ``_wide``
+    twin when the chunk's vertex ids are absolute). Read from the chunk table
+    itself, as today's path reads the row storage (every row version).
+    """
+    first = conn.execute(
+        "SELECT c.name, c.role, m.chunksize FROM tgsis.chunk_columns(%s) c "
+        "JOIN tgsis.model_tables m ON m.tablename = %s "
+        "WHERE c.role IN ('float', 'ref') ORDER BY c.colorder LIMIT 1",
+        (table, table),
+    ).fetchone()
+    assert first is not None, f"tgsis.{table} has no chunk columns"
+    name, role, size = first
+    length = (
+        sql.SQL("cardinality(c.{})").format(sql.Identifier(name))
+        if role == "float"
+        else sql.SQL("coalesce(cardinality(c.{}), cardinality(c.{}))").format(
+            sql.Identifier(name), sql.Identifier(f"{name}_wide")
+        )
+    )
+    row = conn.execute(
+        sql.SQL("SELECT max(c.chunk * {} + {} - 1) FROM {} c WHERE c.geoid = %s").format(
+            sql.Literal(int(size)), length, sql.Identifier("tgsis", f"{table}_chunk")
+        ),
+        (geoid,),
+    ).fetchone()
+    return 0 if row is None or row[0] is None else int(row[0]) + 1
+
+
+def write_object_rows(
+    conn: Conn,
+    table: str,
+    geoid: int,
+    deleted: npt.ArrayLike,
+    ids: npt.ArrayLike,
+    floats: npt.NDArray[np.float64] | None = None,
+    refs: npt.NDArray[np.int64] | None = None,
+) -> int:
+    """Delete ids ``deleted`` (d,) and write rows ``ids`` (n,) of object ``geoid`` of chunked ``tgsis.<table>``.
+
+    One call of ``tgsis.write_object_rows`` (the caller's transaction, READ
+    COMMITTED): every chunk the ids touch rewritten once in the session's
+    working revision, the object noted as changed there.
+
+    Parameters
+    ----------
+    table : str
+        ``vrtx``, ``point``, ``segment``, ``trgl`` or ``tetra``, stored in chunks.
+    geoid : int
+    deleted : (d,) int
+        Ids that go (not among ``ids``).
+    ids : (n,) int
+        Ids written: new ones, or ones whose row is replaced.
+    floats : (n, f) float64, optional
+        The double precision columns' values in column order (vertices: x, y, z).
+    refs : (n, k) int64, optional
+        The vertex-id columns' values in column order (cells: vrtxid1..k).
+
+    Returns
+    -------
+    int
+        Chunks written (an unchanged chunk is not).
+    """
+    gone = np.asarray(deleted, dtype=np.int64).reshape(-1)
+    written = np.asarray(ids, dtype=np.int64).reshape(-1)
+    if not len(gone) and not len(written):
+        return 0
+    # the doubles in binary (%b): bit for bit, NaN payloads too, as the row path's binary COPY sends them
+    row = conn.execute(
+        "SELECT tgsis.write_object_rows(%s, %s, %s::bigint[], %s::bigint[], %b::float8[], %s::bigint[])",
+        (
+            table,
+            int(geoid),
+            gone.tolist(),
+            written.tolist(),
+            None if floats is None or not len(written) else np.asarray(floats, dtype=np.float64).T.tolist(),
+            None if refs is None or not len(written) else np.asarray(refs, dtype=np.int64).T.tolist(),
+        ),
+    ).fetchone()
+    return int(row[0]) if row and row[0] is not None else 0
