@@ -9,17 +9,11 @@
 -- static classes without vertex or cell properties: the geometry carries
 -- none, and a temporal class needs its instants (use Python's insert_feature).
 -- Model 1 stored in chunks (tgsis.stored_in_chunks): the new object's
--- vertices and cells go straight into tgsis.<table>_chunk, one INSERT per
--- table, as the Python upload's COPY does (not row by row through the face,
--- whose INSTEAD OF trigger rewrites a chunk per row): ids 0..n-1 have no
--- holes, and the cells' vertex ids (below n, under 2^31) are always relative
--- (vbase the chunk's smallest id, v1 - vbase, vK - v1), so the contract's
--- encoding is one GROUP BY. In the revision a row write would take
--- (tgsis.write_revision; revision 0 for a class without versioning,
--- tgsis.unversioned_revision; plain storage: tgsis.plain_write_check), noted
--- as changed in it (tgsis.record_changed_objects, as the rows' trigger
--- does); the chunk table's grants and row-level security refuse a role
--- without the class's right, as the face's check does.
+-- vertices and cells go in with one call per table of tgsis.write_object_rows
+-- (the bulk writer of chunks with the row path's checks: the face's INSERT
+-- privilege, the class's write right, the version's, the revision, the note of
+-- the changed object), not row by row through the face, whose INSTEAD OF
+-- trigger rewrites a chunk per row.
 CREATE FUNCTION tgsis.insert_postgis_feature(p_class text, p_geom anyelement, p_properties jsonb DEFAULT '{}',
                                              p_name text DEFAULT NULL)
 RETURNS bigint
@@ -34,9 +28,6 @@ DECLARE
     v_extra text[];
     v_bad   bigint;
     v_table text;
-    v_rev   integer := 0;
-    v_shift integer;
-    v_k     integer;
 BEGIN
     IF v_class.timemodel <> 'STATIC' THEN
         RAISE EXCEPTION 'feature class % is %: its features have instants, which a PostGIS geometry does not give', p_class,
@@ -78,42 +69,21 @@ BEGIN
     v_geoid := tgsis.new_geometry(v_class.geotype, p_name, NULL, 0, 0, p_class => v_class.classname);
     v_table := tgsis.simplex_table(v_class.geotype);
     IF tgsis.stored_in_chunks('vrtx') AND tgsis.stored_in_chunks(v_table) THEN
-        IF EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = 'vrtx') THEN
-            IF EXISTS (SELECT FROM tgsis.unversioned_features u WHERE u.geoid = v_geoid) THEN
-                v_rev := tgsis.unversioned_revision(ARRAY[v_geoid]);  -- TG305
-            ELSE
-                SELECT w.revision INTO v_rev FROM tgsis.write_revision() AS w;  -- TG002, TG301
-            END IF;
-        ELSE
-            PERFORM tgsis.plain_write_check('tgsis', 'vrtx');  -- TG305
-        END IF;
-        v_shift := (SELECT round(log(2, t.chunksize))::integer FROM tgsis.model_tables t WHERE t.tablename = 'vrtx');
-        INSERT INTO tgsis.vrtx_chunk (geoid, chunk, revision, x, y, z)
-        SELECT v_geoid, (i - 1) >> v_shift, v_rev, array_agg(v_mesh.vertices[i][1] ORDER BY i),
-               array_agg(v_mesh.vertices[i][2] ORDER BY i), array_agg(v_mesh.vertices[i][3] ORDER BY i)
-          FROM generate_subscripts(v_mesh.vertices, 1) i
-         GROUP BY (i - 1) >> v_shift;
-        v_shift := (SELECT round(log(2, t.chunksize))::integer FROM tgsis.model_tables t WHERE t.tablename = v_table);
-        v_k := array_length(v_mesh.cells, 2);
-        IF v_k IS NOT NULL THEN
-            EXECUTE format('INSERT INTO tgsis.%I (geoid, chunk, revision, vbase, %s) '
-                           'SELECT $1, c.chunk, $2, min(c.vbase), %s '
-                           '  FROM (SELECT (i - 1) >> $3 AS chunk, i, '
-                           '               min(LEAST(%s)) OVER (PARTITION BY (i - 1) >> $3) AS vbase, %s '
-                           '          FROM generate_subscripts($4, 1) i) c '
-                           ' GROUP BY c.chunk',
-                           v_table || '_chunk',
-                           (SELECT string_agg(format('vrtxid%s', j), ', ') FROM generate_series(1, v_k) j),
-                           (SELECT string_agg(format('array_agg((c.v%s - %s)::integer ORDER BY c.i)', j,
-                                                     CASE WHEN j = 1 THEN 'c.vbase' ELSE 'c.v1' END), ', ')
-                              FROM generate_series(1, v_k) j),
-                           (SELECT string_agg(format('$4[i][%s]', j), ', ') FROM generate_series(1, v_k) j),
-                           (SELECT string_agg(format('$4[i][%1$s]::bigint AS v%1$s', j), ', ') FROM generate_series(1, v_k) j))
-              USING v_geoid, v_rev, v_shift, v_mesh.cells;
-        END IF;
-        IF v_rev <> 0 THEN
-            PERFORM tgsis.record_changed_objects('tgsis', t, ARRAY[v_geoid::text]) FROM unnest(ARRAY['vrtx', v_table]) AS t;
-        END IF;
+        -- the tables' columns as rows of (columns x ids) arrays: the mesh's (ids x columns) transposed
+        PERFORM tgsis.write_object_rows(
+                    'vrtx', v_geoid, '{}', ARRAY(SELECT i - 1 FROM generate_subscripts(v_mesh.vertices, 1) i ORDER BY i),
+                    (SELECT array_agg(c.a ORDER BY c.j)
+                       FROM (SELECT j, array_agg(v_mesh.vertices[i][j] ORDER BY i) AS a
+                               FROM generate_subscripts(v_mesh.vertices, 1) i, generate_subscripts(v_mesh.vertices, 2) j
+                              GROUP BY j) c))
+          WHERE array_length(v_mesh.vertices, 1) > 0;
+        PERFORM tgsis.write_object_rows(
+                    v_table, v_geoid, '{}', ARRAY(SELECT i - 1 FROM generate_subscripts(v_mesh.cells, 1) i ORDER BY i), NULL,
+                    (SELECT array_agg(c.a ORDER BY c.j)
+                       FROM (SELECT j, array_agg(v_mesh.cells[i][j] ORDER BY i) AS a
+                               FROM generate_subscripts(v_mesh.cells, 1) i, generate_subscripts(v_mesh.cells, 2) j
+                              GROUP BY j) c))
+          WHERE array_length(v_mesh.cells, 1) > 0;
     ELSE
         INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z)
         SELECT v_geoid, i - 1, v_mesh.vertices[i][1], v_mesh.vertices[i][2], v_mesh.vertices[i][3]
