@@ -936,3 +936,28 @@ def test_on_chunks_a_postgis_feature_is_written_as_the_upload_writes_it(gconn: C
             reader.execute("SELECT tgsis.insert_postgis_feature('picks', 'POINT Z (1 2 3)'::geometry)")
         reader.rollback()
     assert _one(gconn, "SELECT count(*) FROM tgsis.vrtx_chunk") == stored
+
+
+def test_on_chunks_a_postgis_feature_of_a_class_without_versioning_has_no_history(gconn: Conn) -> None:
+    """Feature versioning on, a class without it: its PostGIS feature's chunks are revision 0 (every version sees
+    them), written from DEFAULT only (another version is refused by name, nothing written), none noted as changed."""
+    tgsis.enable_feature_versioning(gconn)
+    tgsis.create_feature_class(gconn, "wells", "SURFACE", versioned=False, srs=32611)
+    tgsis.create_version(gconn, "draft")
+    _store_in_chunks(gconn)
+    tin = "TIN Z (((0 0 0,1 0 0,0 1 0.5,0 0 0)),((1 0 0,1 1 1,0 1 0.5,1 0 0)))"
+    fid = _one(gconn, "SELECT tgsis.insert_postgis_feature('wells', %s::geometry)", (tin,))
+    for table in ("vrtx", "trgl"):
+        assert gconn.execute(
+            f"SELECT revision, lastrevs FROM tgsis.{table}_chunk WHERE geoid = %s", (fid,)
+        ).fetchall() == [(0, [])]
+    assert _one(gconn, "SELECT count(*) FROM tgsis.revision_objects WHERE objectkey = %s::text", (fid,)) == 0
+    with tgsis.in_version(gconn, "draft"):
+        assert _one(gconn, "SELECT ST_AsText(tgsis.postgis_geometry('wells', %s))", (fid,)) == tin
+    stored = _one(gconn, "SELECT count(*) FROM tgsis.vrtx_chunk")
+    tgsis.goto_version(gconn, "draft")
+    with pytest.raises(tgsis.Error) as err:
+        _one(gconn, "SELECT tgsis.insert_postgis_feature('wells', %s::geometry)", (tin,))
+    assert err.value.sqlstate == "TG305", err.value
+    tgsis.goto_version(gconn, "DEFAULT")
+    assert _one(gconn, "SELECT count(*) FROM tgsis.vrtx_chunk") == stored
