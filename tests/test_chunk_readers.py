@@ -251,8 +251,8 @@ def test_a_check_in_from_a_stale_check_out_is_refused_on_chunks(conn: Conn, vers
 @pytest.mark.parametrize("versioned", [False, True])
 def test_a_role_granted_the_faces_only_counts_through_them(conn: Conn, db_dsn: str, versioned: bool) -> None:
     """A role of no tgsis group granted SELECT on the model relations (the faces after the switch) and one class:
-    tgsis.static_extent answers it as before the switch (it read the chunk tables: 42501); a class it may not read
-    stays hidden."""
+    tgsis.static_extent and the keyed reads answer it as before the switch (they read the chunk tables: 42501); a
+    class it may not read stays hidden."""
     fc = F.create_feature_class(conn, "horizons", "SURFACE")
     hidden = F.create_feature_class(conn, "secrets", "SURFACE")
     geoid = F.insert_feature(conn, fc, _grid(40))
@@ -276,3 +276,7 @@ def test_a_role_granted_the_faces_only_counts_through_them(conn: Conn, db_dsn: s
             2 * 39 * 39,
         )
         assert other.execute("SELECT count(*) FROM tgsis.vrtx WHERE geoid = %s", (secret,)).fetchone() == (0,)
+        # the keyed reads too (through the face), and nothing of the hidden class
+        keyed = "SELECT vrtxid, x, y, z FROM tgsis.vertices(%s, ARRAY[1599, 0, 7, 1600])"
+        assert other.execute(keyed, (geoid,)).fetchall() == conn.execute(keyed, (geoid,)).fetchall() != []
+        assert other.execute("SELECT count(*) FROM tgsis.vertex(%s, 0)", (secret,)).fetchone() == (0,)
