@@ -261,7 +261,16 @@ def test_a_role_granted_the_faces_only_counts_through_them(conn: Conn, db_dsn: s
     if versioned:
         tgsis.enable_feature_versioning(conn)
     _switch(conn)
-    with login_roles(db_dsn, {"outsider": "pg_read_all_settings"}) as roles:
+    conn.execute("REVOKE ALL ON secrets FROM tgsis_reader, tgsis_editor, tgsis_admin, PUBLIC")
+    conn.commit()
+    with login_roles(db_dsn, {"outsider": "pg_read_all_settings", "reader": "tgsis_reader"}) as roles:
+        # a reader reads the chunk tables themselves (their row-level security hides the revoked class)
+        reader = roles.connect("reader")
+        assert reader.execute("SELECT has_table_privilege('tgsis.vrtx_chunk', 'SELECT')").fetchone() == (True,)
+        last = conn.execute("SELECT x, y, z FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = 1599", (geoid,)).fetchall()
+        assert reader.execute("SELECT * FROM tgsis.vertex(%s, 1599)", (geoid,)).fetchall() == last != []
+        assert reader.execute("SELECT * FROM tgsis.vertices(%s, '{0, 1}')", (secret,)).fetchall() == []
+        assert reader.execute("SELECT nvrtx FROM tgsis.static_extent(%s)", (geoid,)).fetchone() == (1600,)
         outsider = roles.name("outsider")
         conn.execute(f"GRANT USAGE ON SCHEMA tgsis TO {outsider}")
         conn.execute(
