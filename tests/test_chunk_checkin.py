@@ -12,6 +12,7 @@ is not switched already), so these tests run on chunks whatever
 
 from __future__ import annotations
 
+import threading
 from typing import Any
 
 import numpy as np
@@ -191,9 +192,15 @@ def test_a_check_in_merged_with_a_change_since_check_out_on_chunks(conn: Conn, l
 
 
 def test_a_role_may_save_on_chunks_only_with_the_rights_of_the_row_path(conn: Conn, loaded: int, db_dsn: str) -> None:
-    """A reader is refused; an editor without the right on the class too; an editor with it saves; nothing else moves."""
+    """A reader is refused; an editor without the right on the class too; an editor with it saves (a vertex moved,
+    one added with a triangle: its new ids read from the chunk tables as the editor); nothing else moves."""
     base = _fetch(conn, loaded)
-    edited = base.copy()
+    edited = tgsis.Surface(
+        np.concatenate([base.vertices, [[-5.0, -5.0, 1.0]]]),
+        np.concatenate([base.cells, [[0, 1, base.n_vertices]]]),
+        vertex_properties={"porosity": np.append(base.vertex_properties["porosity"], 0.25)},
+        name="grid",
+    )
     edited.vertices[10, 0] += 1.0
     with login_roles(db_dsn, {"rita": "tgsis_reader", "ed": "tgsis_editor"}) as made:
         rita, ed = made.connect("rita"), made.connect("ed")
@@ -345,3 +352,108 @@ def test_the_merge_reads_the_changed_chunks_decoded_and_gets_the_three_full_read
     common, at_child, at_base = np.intersect1d(child.vertex_ids, base.vertex_ids, return_indices=True)
     moved = common[child.vertices[at_child, 2] != base.vertices[at_base, 2]]
     assert len(moved) and np.isin(moved, rows["child"].vertex_ids).all()
+
+
+def test_a_face_writer_of_the_object_waits_for_a_save_and_both_changes_stay(
+    conn: Conn, loaded: int, db_dsn: str
+) -> None:
+    """Two sessions: a save holds the object's write lock; an UPDATE of another vertex of it through the face waits,
+    then writes on top of the saved chunk (no lost update of either: the save's vertex 5 and the face's vertex 6)."""
+    base = _fetch(conn, loaded)
+    edited = base.copy()
+    edited.vertices[5, 2] = 42.0
+    other = psycopg.connect(db_dsn)
+    try:
+        conn.execute("SELECT 1")  # a transaction of the caller's: the save runs in it (a savepoint) and stays open
+        tgsis.save_feature(conn, "horizons", loaded, edited)
+        failures: list[BaseException] = []
+
+        def update() -> None:
+            try:
+                other.execute("UPDATE tgsis.vrtx SET z = -42.0 WHERE geoid = %s AND vrtxid = 6", (loaded,))
+                other.commit()
+            except BaseException as exc:  # noqa: BLE001 - reported below
+                failures.append(exc)
+
+        pid = other.info.backend_pid
+        worker = threading.Thread(target=update)
+        worker.start()
+        waiting = False
+        for _ in range(600):  # until the other session waits for a lock (not a timing assert: a bounded poll)
+            with psycopg.connect(db_dsn, autocommit=True) as probe:
+                row = probe.execute("SELECT wait_event_type FROM pg_stat_activity WHERE pid = %s", (pid,)).fetchone()
+            if row is not None and row[0] == "Lock":
+                waiting = True
+                break
+            worker.join(0.05)
+            if not worker.is_alive():
+                break
+        assert waiting, "the face's UPDATE did not wait for the save's lock"
+        conn.commit()
+        worker.join()
+        assert not failures, failures
+    finally:
+        other.close()
+    now = _fetch(conn, loaded)
+    assert now.vertices[5, 2] == 42.0 and now.vertices[6, 2] == -42.0
+    expected = edited.vertices.copy()
+    expected[6, 2] = -42.0
+    assert now.vertices.tobytes() == expected.tobytes()
+
+
+def test_a_feature_of_a_class_without_versioning_is_saved_in_revision_0_in_place(conn: Conn) -> None:
+    """Feature versioning on, the class registered without it: its chunk versions stay revision 0, rewritten in place,
+    and no revision notes the object; a save from another version is refused (NotVersionedError), nothing written."""
+    F.create_feature_class(conn, "loose", "SURFACE", versioned=False)
+    tgsis.enable_feature_versioning(conn)
+    base = _grid(12)
+    geoid = F.insert_feature(conn, "loose", tgsis.Surface(base.vertices, base.cells))
+    conn.commit()
+    _switch(conn)
+    edited = tgsis.Surface(base.vertices.copy(), base.cells)
+    edited.vertices[3, 2] = 9.5
+    tgsis.create_version(conn, "v1")
+    conn.commit()
+    with tgsis.in_version(conn, "v1"), pytest.raises(tgsis.NotVersionedError):
+        tgsis.save_feature(conn, "loose", geoid, edited)
+    conn.rollback()
+    before = conn.execute("SELECT count(*) FROM tgsis.revision_objects WHERE objectkey = %s", (str(geoid),)).fetchone()
+    tgsis.save_feature(conn, "loose", geoid, edited)
+    conn.commit()
+    versions = conn.execute(
+        "SELECT array_agg(DISTINCT revision), count(*), bool_or(revclosed) FROM tgsis.vrtx_chunk WHERE geoid = %s",
+        (geoid,),
+    ).fetchone()
+    assert versions == ([0], 1, False)
+    after = conn.execute("SELECT count(*) FROM tgsis.revision_objects WHERE objectkey = %s", (str(geoid),)).fetchone()
+    assert after == before
+    for version in ("DEFAULT", "v1"):
+        with tgsis.in_version(conn, version):
+            z = conn.execute("SELECT z FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = 3", (geoid,)).fetchone()
+        conn.commit()
+        assert z == (9.5,)
+
+
+def test_a_save_in_a_repeatable_read_session_is_refused_by_name_and_writes_nothing(conn: Conn, loaded: int) -> None:
+    """A session whose transactions are REPEATABLE READ: the chunk writer waits for concurrent writers and must see
+    what they committed, so the save is refused (TG300, naming the isolation level) rather than written from an
+    older snapshot; the row path refuses its deletes alike (tgsis.close_object_rows). Even an edit that only adds."""
+    base = _fetch(conn, loaded)
+    grown = tgsis.Surface(
+        np.concatenate([base.vertices, [[-5.0, -5.0, 1.0]]]),
+        np.concatenate([base.cells, [[0, 1, base.n_vertices]]]),
+        vertex_properties={"porosity": np.append(base.vertex_properties["porosity"], 0.25)},
+        name="grid",
+    )
+    conn.execute("SET default_transaction_isolation = 'repeatable read'")
+    conn.commit()
+    with pytest.raises(tgsis.VersioningError, match="REPEATABLE READ") as refused:
+        tgsis.save_feature(conn, "horizons", loaded, grown)
+    assert refused.value.sqlstate == "TG300"
+    conn.rollback()
+    conn.execute("SET default_transaction_isolation = 'read committed'")
+    conn.commit()
+    assert _same(_fetch(conn, loaded), base)
+    tgsis.save_feature(conn, "horizons", loaded, grown)  # READ COMMITTED again: written
+    conn.commit()
+    assert _same(_fetch(conn, loaded), grown)

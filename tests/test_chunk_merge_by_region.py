@@ -27,6 +27,7 @@ import tgsis
 from tests.merge_data import move
 from tests.test_sql_merge_regions import python_regions, sql_regions
 from tgsis.db import features as F
+from tgsis.merge3 import MeshState
 from tgsis.testing import TestServer
 
 Conn = psycopg.Connection[Any]
@@ -134,7 +135,10 @@ def by_region(conn: Conn, geoid: int) -> tuple[Any, ...]:
         "SELECT objectkey, solution FROM tgsis.conflicts WHERE versionid = tgsis.version_id('e1') ORDER BY 1"
     ).fetchall()
     conn.rollback()
-    return ("done", row[0], version_state(conn, "e1", geoid), version_state(conn, "DEFAULT", geoid), solved)
+    versions = [str(r[0]) for r in conn.execute("SELECT name FROM tgsis.versions ORDER BY versionid").fetchall()]
+    conn.rollback()
+    states = [version_state(conn, v, geoid) for v in versions]
+    return ("done", row[0], *states, solved)
 
 
 # ids in both vertex chunks (chunk 1 starts at 1024), the sides' edits meeting in chunk 0 and apart in chunk 1
@@ -145,11 +149,16 @@ EAST = np.array([1024 + 7, 1024 + 8, 1100])
 
 
 def three_sides(conn: Conn, geoid: int) -> None:
+    """e1 and DEFAULT edit the feature (five regions, one conflicting); another version, e2, made after DEFAULT's
+    edits, rewrites the same chunks (its chunk versions are in none of e1's three sets)."""
     move(conn, "e1", geoid, NORTH, (0.5, 0.0, 1.25))
     move(conn, "e1", geoid, MIDDLE, (0.0, 0.0, 5.0))
     move(conn, "e1", geoid, EAST, (-0.125, 0.0, 0.0))
     move(conn, "DEFAULT", geoid, SOUTH, (-1.0, 0.0, -2.0))
     move(conn, "DEFAULT", geoid, MIDDLE, (0.0, 0.0, -7.0))
+    tgsis.create_version(conn, "e2")
+    conn.commit()
+    move(conn, "e2", geoid, np.concatenate([NORTH, MIDDLE, EAST, SOUTH]), (9.0, 9.0, 9.0))
     conn.commit()
 
 
@@ -330,3 +339,46 @@ def test_revision_indexes_of_a_chunked_table(clones: Clones) -> None:
     conn.execute("SELECT tgsis.create_revision_indexes('tgsis', 'trgl', 'geoid')")
     assert conn.execute(indexes).fetchall() == before
     conn.rollback()
+
+
+def test_a_manual_solution_merges_into_chunks_as_into_rows(clones: Clones, rows_fault: tuple[str, int]) -> None:
+    """A manual mesh (recorded with its rows by the Python resolve_region, on rows) that moves the conflicting
+    region's vertices and one vertex of the region no side changed (a corner of a triangle the version removed):
+    the SQL merge reads the base's rows under the solution from the chunks that hold them and writes what it
+    writes on rows."""
+    geoid = rows_fault[1]
+    removed = 11 * (SIDE - 1) + 11  # triangle (451, 452, 492), next to the middle both sides moved
+    outcomes = []
+    for chunks in (False, True):
+        conn = clones.new()
+        three_sides(conn, geoid)
+        with tgsis.in_version(conn, "e1"):
+            conn.execute("DELETE FROM tgsis.trgl WHERE geoid = %s AND trglid = %s", (geoid, removed))
+        conn.commit()
+        tgsis.find_conflicts(conn, "e1")
+        conn.commit()
+        merge = tgsis.object_merge(conn, "e1", geoid)
+        conn.rollback()
+        (region,) = merge.conflicts
+        untouched = np.setdiff1d(region.vertex_ids, np.union1d(region.parent_vertex_ids, region.child_vertex_ids))
+        assert 452 in untouched.tolist()
+        child = merge.child
+        xyz = child.vertices.copy()
+        xyz[np.isin(child.vertex_ids, np.append(MIDDLE, 452)), 2] += 0.25
+        manual = MeshState(
+            child.cell_size,
+            child.vertex_ids,
+            xyz,
+            child.cell_ids,
+            child.cells,
+            child.vertex_properties,
+            child.cell_properties,
+        )
+        tgsis.resolve_region(conn, "e1", geoid, region.index, "manual", manual)
+        conn.commit()
+        if chunks:
+            switch_to_chunks(conn)
+        outcomes.append(by_region(conn, geoid))
+    rows, chunked = outcomes
+    assert rows[0] == "done", rows
+    assert chunked == rows

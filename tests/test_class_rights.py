@@ -33,6 +33,7 @@ from tgsis.datamodels import TimeModel
 from tgsis.db import features as F
 from tgsis.db._chunk_transfer import ObjectRows, chunked_tables, upload_chunks
 from tgsis.db._transfer import Storage
+from tgsis.db.inspect import static_triangle_corners, static_triangle_rows, static_vertex_rows
 
 Conn = psycopg.Connection[Any]
 
@@ -294,6 +295,20 @@ def test_merge_of_changes_to_a_revoked_class_is_refused(world: World) -> None:
     world.su.execute(f"GRANT UPDATE ON beta TO {world.roles.name('admin')}")
     tgsis.merge_version(admin, "work")
     assert world.su.execute("SELECT min(z) FROM tgsis.vrtx WHERE geoid = %s", (world.beta,)).fetchone() == (7.0,)
+
+
+@pytest.mark.parametrize("who", list(ROLES))
+def test_the_view_s_downloads_by_geoid_return_nothing_of_a_revoked_class(world: World, who: str) -> None:
+    """The browser view's reads take a geoid, no class: the storage's rights decide (rows, or chunks read
+    directly once stored in chunks), as for the model tables."""
+    conn = world.roles.connect(who)
+    for geoid, n, m in ((world.alpha, 25, 32), (world.beta, 0, 0)):
+        assert len(static_vertex_rows(conn, geoid)[0]) == n, (who, geoid)
+        assert len(static_triangle_rows(conn, geoid)[0]) == m, (who, geoid)
+        assert static_triangle_corners(conn, geoid).shape == (m, 3), (who, geoid)
+    fetched = F.fetch_feature(conn, "alpha", world.alpha).mesh  # every role may read alpha: all of it
+    assert fetched is not None and (fetched.n_vertices, fetched.n_cells) == (25, 32)
+    conn.rollback()
 
 
 @pytest.mark.parametrize("who", ["reader", "outsider"])

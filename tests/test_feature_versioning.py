@@ -45,11 +45,7 @@ def _stored(conn: Conn, table: str, schema: str = "tgsis") -> str:
 
 def _decoded(conn: Conn, table: str) -> str:
     """A relation of the stored versions of a model table's rows, one row each: ``<t>_ver`` or ``<t>_chunk_rows``."""
-    row = conn.execute(
-        "SELECT CASE WHEN tgsis.stored_in_chunks(%s) THEN format('tgsis.%%I', %s || '_chunk_rows') "
-        "ELSE tgsis.storage_table('tgsis', %s) END",
-        (table, table, table),
-    ).fetchone()
+    row = conn.execute("SELECT tgsis.storage_row_versions('tgsis', %s)", (table,)).fetchone()
     assert row is not None
     return str(row[0])
 

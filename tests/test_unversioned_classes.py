@@ -58,11 +58,7 @@ def _classes(conn: Conn) -> tuple[tgsis.FeatureClass, tgsis.FeatureClass]:
 def _decoded(conn: Conn, table: str) -> str:
     """The stored versions of a model table's rows, one row each: ``tgsis.<t>_ver``, or in chunks
     ``tgsis.<t>_chunk_rows`` (each chunk version's rows with its revision and lastrevs)."""
-    row = conn.execute(
-        "SELECT CASE WHEN tgsis.stored_in_chunks(%s) THEN format('tgsis.%%I', %s || '_chunk_rows') "
-        "ELSE tgsis.storage_table('tgsis', %s) END",
-        (table, table, table),
-    ).fetchone()
+    row = conn.execute("SELECT tgsis.storage_row_versions('tgsis', %s)", (table,)).fetchone()
     assert row is not None
     return str(row[0])
 

@@ -6,7 +6,9 @@
 -- the vertex or simplex row version it stands for, so that every version and
 -- every revision sees a property row exactly where it sees the vertex or
 -- cell (a vertex moved in a child version has a row version per position,
--- so has its property); the storage's statement trigger notes the objects
+-- so has its property; a table stored in chunks gives the rows of every
+-- chunk version, tgsis.<table>_chunk_rows, so a property row per slot and
+-- chunk version); the storage's statement trigger notes the objects
 -- in tgsis.revision_objects, as for any direct write. A class registered
 -- without versioning keeps plain tables while the model's are versioned:
 -- its features are written in DEFAULT only, whose live rows (not closed)
@@ -65,7 +67,9 @@ BEGIN
                                                        WHEN 'segment' THEN 'segid' WHEN 'trgl' THEN 'trglid'
                                                        ELSE 'tetraid' END,
                                          CASE WHEN v_versioned THEN ', s.revision, s.lastrevs' ELSE '' END,
-                                         tgsis.storage_table('tgsis', v_source),
+                                         -- stored in chunks: every chunk version's rows, each with its
+                                         -- revision and lastrevs (the decoded view, no visibility filter)
+                                         tgsis.storage_row_versions('tgsis', v_source),
                                          CASE WHEN v_source_versioned AND NOT v_versioned THEN ' AND NOT s.revclosed' ELSE '' END);
     END LOOP;
     EXECUTE format('WITH made AS (INSERT INTO %s (_geoid, _idx%s%s) SELECT r.* %s FROM (%s) AS r RETURNING _geoid, _idx)

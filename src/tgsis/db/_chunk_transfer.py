@@ -76,11 +76,14 @@ class ChunkTable:
         Its arrays: ``double precision[]`` columns as float8, ``integer[]`` ones as ref columns.
     versioned : bool
         The row table is versioned (``tgsis.versioned_tables``): chunk versions are filtered by the session's set.
+    readable : bool
+        The role may SELECT from the chunk table (a role granted only the face ``tgsis.<table>`` reads through it).
     """
 
     table: str
     columns: ChunkColumns
     versioned: bool
+    readable: bool = True
 
     @property
     def relation(self) -> sql.Composed:
@@ -143,15 +146,16 @@ def chunk_table(conn: Conn, table: str) -> ChunkTable:
     row = conn.execute(
         "SELECT to_regclass(format('tgsis.%%I', %s::text || '_chunk'))::oid, "
         "EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = %s), "
-        "(SELECT m.chunksize FROM tgsis.model_tables m WHERE m.tablename = %s)",
-        (table, table, table),
+        "(SELECT m.chunksize FROM tgsis.model_tables m WHERE m.tablename = %s), "
+        "has_table_privilege(to_regclass(format('tgsis.%%I', %s::text || '_chunk')), 'SELECT')",
+        (table, table, table, table),
     ).fetchone()
     if row is None or row[0] is None:
         raise NotFoundError(
             f"tgsis.{table} has no chunk table",
             detail=f"tgsis.{table}_chunk does not exist (tgsis.create_chunk_table makes it)",
         )
-    oid, versioned, size = row
+    oid, versioned, size, readable = row
     attributes = conn.execute(
         "SELECT attname::text, format_type(atttypid, atttypmod) FROM pg_catalog.pg_attribute "
         "WHERE attrelid = %s AND attnum > 0 AND NOT attisdropped ORDER BY attnum",
@@ -170,7 +174,7 @@ def chunk_table(conn: Conn, table: str) -> ChunkTable:
             f"tgsis.{table}_chunk is not a model-1 chunk table of {CHUNK_SIZE} ids per chunk",
             detail=f"key {keys}, chunk size {size}, arrays {arrays}",
         )
-    return ChunkTable(table, ChunkColumns(tuple(n for n, _ in arrays), refs=refs), bool(versioned))
+    return ChunkTable(table, ChunkColumns(tuple(n for n, _ in arrays), refs=refs), bool(versioned), bool(readable))
 
 
 def upload_chunks(conn: Conn, table: str, objects: Sequence[ObjectRows], storage: Storage | None = None) -> int:
@@ -546,10 +550,14 @@ def rows_request(
     Returns
     -------
     Packed or PackedChunks
-        The rows of the face ``tgsis.<table>`` (rows storage), or of ``tgsis.<table>_chunk``.
+        The rows of ``tgsis.<table>`` (rows storage), or of ``tgsis.<table>_chunk``; of the face
+        ``tgsis.<table>`` still for a role that may read the face but not the chunk table (a DBA's grant
+        on the relation users query: it reads what it read before the switch, decoded by the server).
     """
     if table in chunked:
-        return PackedChunks(chunk_table(conn, table), geoids, [name for name, _ in columns])
+        layout = chunk_table(conn, table)
+        if layout.readable:
+            return PackedChunks(layout, geoids, [name for name, _ in columns])
     return Packed(sql.SQL("tgsis.{}").format(sql.Identifier(table)), "geoid", columns, geoids)
 
 

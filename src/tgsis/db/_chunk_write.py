@@ -20,7 +20,10 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
-__all__ = ["stored_in_chunks", "next_id", "write_object_rows"]
+from tgsis._chunks import CHUNK_SIZE
+from tgsis.db._chunk_transfer import chunk_table
+
+__all__ = ["last_id", "next_id", "stored_in_chunks", "write_object_rows"]
 
 Conn = psycopg.Connection[Any]
 IntArray = npt.NDArray[np.int64]
@@ -32,32 +35,38 @@ def stored_in_chunks(conn: Conn, table: str) -> bool:
     return bool(row and row[0])
 
 
-def next_id(conn: Conn, table: str, idfield: str, geoid: int) -> int:
-    """The first local id above every id object ``geoid`` ever had in chunked ``tgsis.<table>`` (every chunk version).
+def last_id(conn: Conn, table: str, alias: str = "c") -> sql.Composable:
+    """The last present id of a chunk version ``alias`` of ``tgsis.<table>_chunk``, as an SQL expression.
 
     A chunk version's arrays end at its last present slot, so its last id is
-    ``chunk * chunksize + length - 1`` (of the first array, or of its ``_wide``
-    twin when the chunk's vertex ids are absolute). Read from the chunk table
-    itself, as today's path reads the row storage (every row version).
+    ``chunk * chunksize + length - 1`` (of the first array, or of its
+    ``_wide`` twin when the chunk's vertex ids are absolute): no decoding.
     """
-    first = conn.execute(
-        "SELECT c.name, c.role, m.chunksize FROM tgsis.chunk_columns(%s) c "
-        "JOIN tgsis.model_tables m ON m.tablename = %s "
-        "WHERE c.role IN ('float', 'ref') ORDER BY c.colorder LIMIT 1",
-        (table, table),
-    ).fetchone()
-    assert first is not None, f"tgsis.{table} has no chunk columns"
-    name, role, size = first
+    # the layout from the catalog, which every role may read (tgsis.chunk_columns is internal)
+    layout = chunk_table(conn, table)
+    name = layout.columns.names[0]
+    role = "ref" if name in layout.columns.refs else "float"
+    size = CHUNK_SIZE  # chunk_table refuses a chunk table of another size
+    a = sql.Identifier(alias)
     length = (
-        sql.SQL("cardinality(c.{})").format(sql.Identifier(name))
+        sql.SQL("cardinality({}.{})").format(a, sql.Identifier(name))
         if role == "float"
-        else sql.SQL("coalesce(cardinality(c.{}), cardinality(c.{}))").format(
-            sql.Identifier(name), sql.Identifier(f"{name}_wide")
+        else sql.SQL("coalesce(cardinality({a}.{}), cardinality({a}.{}))").format(
+            sql.Identifier(name), sql.Identifier(f"{name}_wide"), a=a
         )
     )
+    return sql.SQL("({}.chunk * {} + {} - 1)").format(a, sql.Literal(int(size)), length)
+
+
+def next_id(conn: Conn, table: str, geoid: int) -> int:
+    """The first local id above every id object ``geoid`` ever had in chunked ``tgsis.<table>`` (every chunk version).
+
+    Read from the chunk table itself (:func:`last_id` of each version), as
+    today's path reads the row storage (every row version).
+    """
     row = conn.execute(
-        sql.SQL("SELECT max(c.chunk * {} + {} - 1) FROM {} c WHERE c.geoid = %s").format(
-            sql.Literal(int(size)), length, sql.Identifier("tgsis", f"{table}_chunk")
+        sql.SQL("SELECT max({}) FROM {} c WHERE c.geoid = %s").format(
+            last_id(conn, table), sql.Identifier("tgsis", f"{table}_chunk")
         ),
         (geoid,),
     ).fetchone()

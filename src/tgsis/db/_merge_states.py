@@ -19,6 +19,7 @@ import psycopg
 from psycopg import sql
 
 from tgsis._merge_slices import SlicedState, slice_text
+from tgsis.db._chunk_write import last_id
 from tgsis.db._settings import read_version_settings, restore_version_settings
 from tgsis.db._state_write import key_codes
 from tgsis.db._static import SIMPLEX
@@ -676,9 +677,25 @@ def _read_change(
         (v0 if alignment == "VERTEX" else c0).append(np.asarray(columns[1], dtype=np.int64))
     v0_ids, c0_ids = np.unique(np.concatenate(v0)), np.unique(np.concatenate(c0))
 
-    def cells(where: sql.Composable) -> list[npt.NDArray[Any]]:
+    def holding(t: _Table, s: str, ids: npt.NDArray[np.int64]) -> str:
+        """The relation to read rows of ``ids`` from: of a table stored in chunks, only the chunks holding them
+        decoded (``tgsis.storage_row_versions``, the merges' one way to name it); else the storage ``s``."""
+        if s != f"tgsis.{t.view}_chunk_rows" or not len(ids):
+            return s
+        allowed = conn.execute(  # (granted to tgsis's roles: another role reads the decoded view, as before)
+            "SELECT has_function_privilege('tgsis.storage_row_versions(text, text, bigint[])', 'EXECUTE')"
+        ).fetchone()
+        if not (allowed and allowed[0]):
+            return s
+        row = conn.execute(
+            "SELECT tgsis.storage_row_versions(%s, %s, %s::bigint[])", (t.schema, t.view, np.unique(ids).tolist())
+        ).fetchone()
+        assert row is not None
+        return str(row[0])  # a parenthesized subquery, aliased by the reads
+
+    def cells(where: sql.Composable, within: str = cell_s) -> list[npt.NDArray[Any]]:
         return columns_out_all(
-            conn, [Packed(_rows_where(cell_t, cell_s, sets, where), cell_t.key, cell_cols, [geoid])]
+            conn, [Packed(_rows_where(cell_t, within, sets, where), cell_t.key, cell_cols, [geoid])]
         )[0]
 
     def on(vertex_ids: npt.NDArray[np.int64]) -> sql.Composable:
@@ -698,7 +715,10 @@ def _read_change(
         return sql.SQL("({}) AND ({})").format(spans, exact)
 
     by_id = (
-        cells(sql.SQL("v.{} = ANY ({})").format(sql.Identifier(cell_t.columns[0][0]), _int8_array(c0_ids)))
+        cells(
+            sql.SQL("v.{} = ANY ({})").format(sql.Identifier(cell_t.columns[0][0]), _int8_array(c0_ids)),
+            holding(cell_t, cell_s, c0_ids),
+        )
         if len(c0_ids)
         else None
     )
@@ -719,20 +739,31 @@ def _read_change(
     read = columns_out_all(
         conn,
         [
-            Packed(_rows_where(t, s, sets, by_ids(t, ids)), t.key, (*t.columns, ("_seen", "int4")), [geoid])
+            Packed(
+                _rows_where(t, holding(t, s, ids), sets, by_ids(t, ids)),
+                t.key,
+                (*t.columns, ("_seen", "int4")),
+                [geoid],
+            )
             for t, s, ids in wanted
         ],
     )
     top = []
     for t, s in ((vertex_t, vertex_s), (cell_t, cell_s)):
         idcol = sql.Identifier(t.columns[0][0])
-        row = conn.execute(
-            sql.SQL(
+        if s == f"tgsis.{t.view}_chunk_rows":  # stored in chunks: the visible chunk versions' last ids, not decoded
+            query = sql.SQL("SELECT max({last}) FROM {chunks} v WHERE v.{key} = %s AND {visible}").format(
+                last=last_id(conn, t.view, "v"),
+                chunks=sql.Identifier("tgsis", f"{t.view}_chunk"),
+                key=sql.Identifier(t.key),
+                visible=_visible_in(sets),
+            )
+        else:
+            query = sql.SQL(
                 "SELECT v.{id} FROM {storage} v WHERE v.{key} = %s AND {visible} ORDER BY v.{id} DESC LIMIT 1"
-            ).format(id=idcol, storage=sql.SQL(s), key=sql.Identifier(t.key), visible=_visible_in(sets)),
-            (geoid,),
-        ).fetchone()
-        top.append(-1 if row is None else int(row[0]))
+            ).format(id=idcol, storage=sql.SQL(s), key=sql.Identifier(t.key), visible=_visible_in(sets))
+        row = conn.execute(query, (geoid,)).fetchone()
+        top.append(-1 if row is None or row[0] is None else int(row[0]))
 
     none = np.empty(0, dtype=np.int64)
     rows = {}

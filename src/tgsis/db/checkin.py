@@ -286,7 +286,7 @@ def _same_values(a: npt.NDArray[Any], b: npt.NDArray[Any]) -> npt.NDArray[np.boo
 def _next_id(conn: Conn, storage: Storage, table: str, key: str, idfield: str, geoid: int) -> int:
     """The first id above every id the object has ever had in ``table`` (every row version when versioned)."""
     if stored_in_chunks(conn, table):
-        return next_chunk_id(conn, table, idfield, geoid)
+        return next_chunk_id(conn, table, geoid)
     row = conn.execute(
         sql.SQL("SELECT max({}) FROM {} WHERE {} = %s").format(
             sql.Identifier(idfield), storage.table("tgsis", table), sql.Identifier(key)
