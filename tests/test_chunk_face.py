@@ -38,6 +38,12 @@ def _faces(conn: Conn, tables: Iterable[str] = ("vrtx",)) -> None:
     conn.commit()
 
 
+def _switch_vrtx(conn: Conn) -> None:
+    """The storage switch of tgsis.vrtx (the keyed reads read the chunks once it is stored in chunks, not before)."""
+    conn.execute("SELECT tgsis.store_in_chunks('vrtx') WHERE NOT tgsis.stored_in_chunks('vrtx')")
+    conn.commit()
+
+
 def _write(conn: Conn, table: str, rows: Sequence[Sequence[Any]]) -> None:
     """Write ``rows`` (the row table's columns in order) into the chunks through the writer."""
     conn.execute("DROP TABLE IF EXISTS pg_temp.chunk_rows")
@@ -67,11 +73,13 @@ def _decoded(conn: Conn, table: str) -> list[tuple[Any, ...]]:
     return [tuple(r) for r in conn.execute(query).fetchall()]
 
 
-def _face(conn: Conn, table: str = "vrtx", where: str = "") -> list[tuple[Any, ...]]:
+def _face(conn: Conn, table: str = "vrtx", where: str = "", face: str | None = None) -> list[tuple[Any, ...]]:
     return [
         tuple(r)
         for r in conn.execute(
-            sql.SQL("SELECT * FROM tgsis.{} {} ORDER BY 1, 2").format(sql.Identifier(f"{table}_face"), sql.SQL(where))
+            sql.SQL("SELECT * FROM tgsis.{} {} ORDER BY 1, 2").format(
+                sql.Identifier(face or f"{table}_face"), sql.SQL(where)
+            )
         ).fetchall()
     ]
 
@@ -366,7 +374,8 @@ def test_roles_with_fewer_rights(db_dsn: str, conn: Conn) -> None:
     with login_roles(db_dsn, {"reader": "tgsis_reader", "editor": "tgsis_editor"}) as roles:
         reader = roles.connect("reader")
         assert {r[0] for r in reader.execute("SELECT geoid FROM tgsis.vrtx_face").fetchall()} == {alpha}
-        assert reader.execute("SELECT * FROM tgsis.vertex(%s, 1)", (alpha,)).fetchall() == [(1.0, -1.0, 1.5)]
+        # the keyed reads read today's rows before the switch (tests/test_chunk_readers.py: after it)
+        assert reader.execute("SELECT * FROM tgsis.vertex(%s, 1)", (alpha,)).fetchall() == [(0.0, 1.0, 0.0)]
         assert reader.execute("SELECT * FROM tgsis.vertex(%s, 1)", (beta,)).fetchall() == []
         assert reader.execute("SELECT * FROM tgsis.vertices(%s, '{0, 1}')", (beta,)).fetchall() == []
         # a function of the reader's query sees no row of the class first (security barrier)
@@ -425,14 +434,14 @@ def test_keyed_reads_read_today_s_rows_then_the_chunks_by_key(conn: Conn) -> Non
     assert conn.execute("SELECT * FROM tgsis.vertices(%s, '{2, 0, 9, -1, 1, 2}')", (geoid,)).fetchall() == [
         (i, *eye[i]) for i in (2, 0, 1, 2)
     ]
-    # the chunks, once tgsis.vrtx_chunk exists: their content (other values than the rows'), versioned
-    _faces(conn)
+    # the chunks, once tgsis.vrtx is stored in chunks: their content (other values than the rows'), versioned
+    _switch_vrtx(conn)
     ids = [0, 1, 2, 1023, 1024, 5000, 2**33 + 7]
     _write(conn, "vrtx", _vertices(ids, geoid=geoid, scale=3.0))
     conn.commit()
     tgsis.create_version(conn, "child")
     tgsis.goto_version(conn, "child")
-    conn.execute("UPDATE tgsis.vrtx_face SET x = -1 WHERE geoid = %s AND vrtxid = 1024", (geoid,))
+    conn.execute("UPDATE tgsis.vrtx SET x = -1 WHERE geoid = %s AND vrtxid = 1024", (geoid,))
     conn.commit()
     want = {r[1]: r[2:] for r in _vertices(ids, geoid=geoid, scale=3.0)}
     child = {**want, 1024: (-1.0, *want[1024][1:])}
@@ -445,7 +454,7 @@ def test_keyed_reads_read_today_s_rows_then_the_chunks_by_key(conn: Conn) -> Non
             one = conn.execute("SELECT * FROM tgsis.vertex(%s, %s)", (geoid, i)).fetchall()
             assert one == ([expected[i]] if i in expected else []), (version, i)
             # the same as the face's row
-            assert one == [r[2:] for r in _face(conn, where=f"WHERE geoid = {geoid} AND vrtxid = {i}")]
+            assert one == [r[2:] for r in _face(conn, where=f"WHERE geoid = {geoid} AND vrtxid = {i}", face="vrtx")]
     # the functions' labels: public, STABLE, PARALLEL SAFE, the caller's rights
     labels = conn.execute(
         "SELECT proname, provolatile, proparallel, prosecdef, has_function_privilege('public', oid, 'EXECUTE') "
@@ -456,7 +465,7 @@ def test_keyed_reads_read_today_s_rows_then_the_chunks_by_key(conn: Conn) -> Non
 
 
 def test_tgsis_vertex_reads_one_chunk(conn: Conn) -> None:
-    _faces(conn)
+    _switch_vrtx(conn)
     # 60 objects of 10 chunks (a few vertices each), one of them full: a table the planner reads by key
     rows = [
         r for geoid in range(1, 61) for r in _vertices([k * 1024 + j for k in range(10) for j in (0, 700)], geoid=geoid)
@@ -493,7 +502,7 @@ def _ms(conn: Conn, statement: str, params: Sequence[Any] = (), runs: int = 5) -
 
 def test_measure_one_vertex_by_key_and_a_10k_row_update_on_a_1m_vertex_object(conn: Conn) -> None:
     tgsis.enable_feature_versioning(conn)
-    _faces(conn)
+    _switch_vrtx(conn)
     conn.execute(
         "CREATE TEMP TABLE big AS SELECT 1::bigint AS geoid, i AS vrtxid, i::float8 AS x, -i::float8 AS y, "
         "0.5::float8 AS z, false AS _delete FROM generate_series(0::bigint, 999999) AS i"
@@ -504,23 +513,21 @@ def test_measure_one_vertex_by_key_and_a_10k_row_update_on_a_1m_vertex_object(co
     conn.commit()
     key = 654_321
     want = [(float(key), -float(key), 0.5)]
-    assert (
-        conn.execute("SELECT x, y, z FROM tgsis.vrtx_face WHERE geoid = 1 AND vrtxid = %s", (key,)).fetchall() == want
-    )
+    assert conn.execute("SELECT x, y, z FROM tgsis.vrtx WHERE geoid = 1 AND vrtxid = %s", (key,)).fetchall() == want
     assert conn.execute("SELECT * FROM tgsis.vertex(1, %s)", (key,)).fetchall() == want
-    face = _ms(conn, "SELECT x, y, z FROM tgsis.vrtx_face WHERE geoid = 1 AND vrtxid = %s", (key,))
+    face = _ms(conn, "SELECT x, y, z FROM tgsis.vrtx WHERE geoid = 1 AND vrtxid = %s", (key,))
     function = _ms(conn, "SELECT * FROM tgsis.vertex(1, %s)", (key,), runs=21)
     many = _ms(conn, "SELECT * FROM tgsis.vertices(1, %s)", (list(range(0, 1_000_000, 1000)),), runs=5)
     print(f"\none vertex by key, 1M-vertex object: through the face {face:.1f} ms, tgsis.vertex {function:.2f} ms")
     print(f"tgsis.vertices of 1,000 ids in 977 chunks: {many:.1f} ms")
     # a 10k-row UPDATE through the face: queued by the row trigger, written by one call of the writer at the end
     start = time.perf_counter()
-    updated = conn.execute("UPDATE tgsis.vrtx_face SET z = z + 1 WHERE geoid = 1 AND vrtxid < 10000").rowcount
+    updated = conn.execute("UPDATE tgsis.vrtx SET z = z + 1 WHERE geoid = 1 AND vrtxid < 10000").rowcount
     conn.commit()
     print(f"10,000-row UPDATE through the face (10 chunks): {(time.perf_counter() - start) * 1000:.0f} ms")
     assert updated == 10_000
     assert conn.execute(
-        "SELECT count(*), min(z), max(z) FROM tgsis.vrtx_face WHERE geoid = 1 AND vrtxid < 10010"
+        "SELECT count(*), min(z), max(z) FROM tgsis.vrtx WHERE geoid = 1 AND vrtxid < 10010"
     ).fetchone() == (
         10_010,
         0.5,

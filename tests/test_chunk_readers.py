@@ -246,3 +246,46 @@ def test_a_check_in_from_a_stale_check_out_is_refused_on_chunks(conn: Conn, vers
         conn.execute("SELECT tgsis.check_unchanged(%s, %s)", (geoid, taken))
     assert err.value.sqlstate == "TG304"
     conn.rollback()
+
+
+@pytest.mark.parametrize("versioned", [False, True])
+def test_a_role_granted_the_faces_only_counts_through_them(conn: Conn, db_dsn: str, versioned: bool) -> None:
+    """A role of no tgsis group granted SELECT on the model relations (the faces after the switch) and one class:
+    tgsis.static_extent and the keyed reads answer it as before the switch (they read the chunk tables: 42501); a
+    class it may not read stays hidden."""
+    fc = F.create_feature_class(conn, "horizons", "SURFACE")
+    hidden = F.create_feature_class(conn, "secrets", "SURFACE")
+    geoid = F.insert_feature(conn, fc, _grid(40))
+    secret = F.insert_feature(conn, hidden, _grid(3))
+    conn.commit()
+    if versioned:
+        tgsis.enable_feature_versioning(conn)
+    _switch(conn)
+    conn.execute("REVOKE ALL ON secrets FROM tgsis_reader, tgsis_editor, tgsis_admin, PUBLIC")
+    conn.commit()
+    with login_roles(db_dsn, {"outsider": "pg_read_all_settings", "reader": "tgsis_reader"}) as roles:
+        # a reader reads the chunk tables themselves (their row-level security hides the revoked class)
+        reader = roles.connect("reader")
+        assert reader.execute("SELECT has_table_privilege('tgsis.vrtx_chunk', 'SELECT')").fetchone() == (True,)
+        last = conn.execute("SELECT x, y, z FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = 1599", (geoid,)).fetchall()
+        assert reader.execute("SELECT * FROM tgsis.vertex(%s, 1599)", (geoid,)).fetchall() == last != []
+        assert reader.execute("SELECT * FROM tgsis.vertices(%s, '{0, 1}')", (secret,)).fetchall() == []
+        assert reader.execute("SELECT nvrtx FROM tgsis.static_extent(%s)", (geoid,)).fetchone() == (1600,)
+        outsider = roles.name("outsider")
+        conn.execute(f"GRANT USAGE ON SCHEMA tgsis TO {outsider}")
+        conn.execute(
+            f"GRANT SELECT ON tgsis.catalog, tgsis.versions, tgsis.revisions, tgsis.versioned_tables TO {outsider}"
+        )
+        conn.execute(f"GRANT SELECT ON tgsis.geometry, tgsis.vrtx, tgsis.trgl, public.horizons TO {outsider}")
+        conn.commit()
+        other = roles.connect("outsider")
+        assert other.execute("SELECT has_table_privilege('tgsis.vrtx_chunk', 'SELECT')").fetchone() == (False,)
+        assert other.execute("SELECT nvrtx, ncell FROM tgsis.static_extent(%s)", (geoid,)).fetchone() == (
+            1600,
+            2 * 39 * 39,
+        )
+        assert other.execute("SELECT count(*) FROM tgsis.vrtx WHERE geoid = %s", (secret,)).fetchone() == (0,)
+        # the keyed reads too (through the face), and nothing of the hidden class
+        keyed = "SELECT vrtxid, x, y, z FROM tgsis.vertices(%s, ARRAY[1599, 0, 7, 1600])"
+        assert other.execute(keyed, (geoid,)).fetchall() == conn.execute(keyed, (geoid,)).fetchall() != []
+        assert other.execute("SELECT count(*) FROM tgsis.vertex(%s, 0)", (secret,)).fetchone() == (0,)

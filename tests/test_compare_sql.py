@@ -344,9 +344,14 @@ def check_versions(conn: Conn, geoid: int, old: tuple[str, int | None], new: tup
 
 
 def _storage_rows(conn: Conn) -> dict[str, int]:
+    """Rows of the storage (row versions, or chunk versions once a table is stored in chunks) and of the registry."""
+    storage = [
+        str(conn.execute("SELECT tgsis.storage_table('tgsis', %s)", (t,)).fetchone()[0])  # type: ignore[index]
+        for t in ("geometry", "vrtx", "trgl")
+    ]
     return {
         t: int(conn.execute(f"SELECT count(*) FROM {t}").fetchone()[0])  # type: ignore[index]
-        for t in ("tgsis.geometry_ver", "tgsis.vrtx_ver", "tgsis.trgl_ver", "tgsis.versions", "tgsis.revisions")
+        for t in (*storage, "tgsis.versions", "tgsis.revisions")
     }
 
 

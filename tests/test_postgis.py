@@ -832,3 +832,132 @@ def test_a_dump_without_postgis_restores_where_there_is_none(gis: GisServer, tmp
             conn.execute("CREATE EXTENSION postgis")  # PostGIS later, on the restored database
             tgsis.enable_postgis(conn)
             assert _one(conn, "SELECT ST_NPoints(tgsis.postgis_geometry('faults', %s))", (fid,)) == 32
+
+
+def _store_in_chunks(conn: Conn) -> None:
+    """The storage switch of model 1 (this module installs tgsis itself: TGSIS_TEST_STORAGE does not reach it)."""
+    conn.execute(
+        "SELECT tgsis.store_in_chunks(tablename) FROM tgsis.model_tables"
+        " WHERE chunkcolumn IS NOT NULL AND NOT tgsis.stored_in_chunks(tablename) ORDER BY model, iudorder, tablename"
+    )
+
+
+def _chunk_contents(conn: Conn, table: str, geoid: int) -> list[tuple[Any, ...]]:
+    """Every stored chunk version of an object, its arrays as their send forms (bit for bit), but geoid and revision."""
+    columns = [
+        r[0]
+        for r in conn.execute(
+            "SELECT attname FROM pg_attribute WHERE attrelid = %s::regclass AND attnum > 0 AND NOT attisdropped"
+            " AND attname NOT IN ('geoid', 'revision', 'lastrevs', 'revclosed') ORDER BY attnum",
+            (f"tgsis.{table}_chunk",),
+        ).fetchall()
+    ]
+    select = sql.SQL(", ").join(
+        sql.SQL("array_send({})").format(sql.Identifier(c)) if c not in ("chunk", "vbase") else sql.Identifier(c)
+        for c in columns
+    )
+    query = sql.SQL("SELECT {} FROM tgsis.{} WHERE geoid = %s ORDER BY chunk").format(
+        select, sql.Identifier(f"{table}_chunk")
+    )
+    return conn.execute(query, (geoid,)).fetchall()
+
+
+@pytest.mark.parametrize("versioned", [False, True])
+def test_on_chunks_a_postgis_feature_is_written_as_the_upload_writes_it(gconn: Conn, versioned: bool) -> None:
+    """Model 1 stored in chunks: insert_postgis_feature writes each table's chunks in one statement, never row by
+    row through the face (its INSTEAD OF trigger ran once per vertex and triangle before), and the chunks are the
+    ones tgsis.insert_feature writes for the same mesh, bit for bit; the feature reads back as it went in."""
+    tgsis.create_feature_class(gconn, "faults", "SURFACE", srs=32611)
+    tgsis.create_feature_class(gconn, "traces", "MULTILINESTRING", srs=32611)
+    tgsis.create_feature_class(gconn, "picks", "MULTIPOINT", srs=32611)
+    if versioned:
+        tgsis.enable_feature_versioning(gconn)
+        tgsis.create_version(gconn, "draft")
+        tgsis.goto_version(gconn, "draft")
+    _store_in_chunks(gconn)
+    grid = flat_grid(45, 1.0)  # 2,025 vertices in 2 chunks, 3,872 triangles in 4
+    cases = [
+        ("faults", "trgl", mesh_to_ewkb(grid, 32611)),
+        ("traces", "segment", _one(gconn, "SELECT 'MULTILINESTRING Z ((0 0 0,1 0 0,1 1 1),(5 5 5,6 6 6))'::geometry")),
+        ("picks", "point", _one(gconn, "SELECT 'MULTIPOINT Z (1 2 3,4 5 6,-0 0 1)'::geometry")),
+    ]
+    gconn.execute("SET track_functions = 'all'")
+    for name, table, geom in cases:
+        face = "SELECT coalesce(sum(calls), 0) FROM pg_stat_xact_user_functions WHERE funcname = 'chunk_face_write'"
+        with gconn.transaction():  # (the view may show calls of earlier transactions not yet reported: a difference)
+            before = _one(gconn, face)
+            fid = _one(gconn, "SELECT tgsis.insert_postgis_feature(%s, %s::geometry)", (name, geom))
+            calls = _one(gconn, face) - before
+        assert calls == 0, (name, calls)
+        _, vertices, cells = gconn.execute(
+            "SELECT geotype, vertices, cells FROM tgsis.mesh_from_postgis(%s::geometry)", (geom,)
+        ).fetchone()  # type: ignore[misc]
+        mesh = mesh_from_wkb(_one(gconn, "SELECT tgsis.postgis_geometry(%s, %s)", (name, fid)))
+        assert np.array_equal(mesh.cells, np.array(cells)) and np.array_equal(mesh.vertices, np.array(vertices))
+        assert gconn.execute("SELECT nvrtx, ncell FROM tgsis.geometry WHERE geoid = %s", (fid,)).fetchone() == (
+            len(vertices),
+            len(cells),
+        )
+        # the oracle: the same rows written into a new object by tgsis.write_chunk_rows (the faces' writer)
+        same = _one(
+            gconn,
+            "SELECT tgsis.new_geometry(geotype, NULL, NULL, 0, 0, p_class => %s) FROM tgsis.geometry WHERE geoid = %s",
+            (name, fid),
+        )
+        with gconn.transaction():
+            for t in ("vrtx", table):
+                gconn.execute(
+                    f"CREATE TEMP TABLE rows ON COMMIT DROP AS SELECT * FROM tgsis.{t} WHERE geoid = %s", (fid,)
+                )
+                gconn.execute("UPDATE rows SET geoid = %s", (same,))
+                gconn.execute("ALTER TABLE rows ADD COLUMN _delete boolean NOT NULL DEFAULT false")
+                gconn.execute("SELECT tgsis.write_chunk_rows(%s, 'pg_temp.rows')", (t,))
+                gconn.execute("DROP TABLE rows")
+        for t in ("vrtx", table):
+            assert _chunk_contents(gconn, t, fid) == _chunk_contents(gconn, t, same), (name, t)
+        if versioned:  # noted as changed in the draft's working revision, as a row write is; DEFAULT does not see it
+            noted = _one(
+                gconn,
+                "SELECT array_agg(DISTINCT tablename ORDER BY tablename) FROM tgsis.revision_objects"
+                " WHERE objectkey = %s::text AND revision = (SELECT workingrevision FROM tgsis.versions"
+                " WHERE name = 'draft')",
+                (fid,),
+            )
+            assert {"vrtx", table} <= set(noted), noted
+            with tgsis.in_version(gconn, "DEFAULT"):
+                assert _one(gconn, "SELECT count(*) FROM tgsis.vrtx WHERE geoid = %s", (fid,)) == 0
+    # a reader may not write, and nothing is written
+    stored = _one(gconn, "SELECT count(*) FROM tgsis.vrtx_chunk")
+    with login_roles(gconn.info.dsn, {"ann": "tgsis_reader"}) as roles:
+        reader = roles.connect("ann")
+        if versioned:
+            tgsis.goto_version(reader, "draft")
+        with pytest.raises(psycopg.Error):
+            reader.execute("SELECT tgsis.insert_postgis_feature('picks', 'POINT Z (1 2 3)'::geometry)")
+        reader.rollback()
+    assert _one(gconn, "SELECT count(*) FROM tgsis.vrtx_chunk") == stored
+
+
+def test_on_chunks_a_postgis_feature_of_a_class_without_versioning_has_no_history(gconn: Conn) -> None:
+    """Feature versioning on, a class without it: its PostGIS feature's chunks are revision 0 (every version sees
+    them), written from DEFAULT only (another version is refused by name, nothing written), none noted as changed."""
+    tgsis.enable_feature_versioning(gconn)
+    tgsis.create_feature_class(gconn, "wells", "SURFACE", versioned=False, srs=32611)
+    tgsis.create_version(gconn, "draft")
+    _store_in_chunks(gconn)
+    tin = "TIN Z (((0 0 0,1 0 0,0 1 0.5,0 0 0)),((1 0 0,1 1 1,0 1 0.5,1 0 0)))"
+    fid = _one(gconn, "SELECT tgsis.insert_postgis_feature('wells', %s::geometry)", (tin,))
+    for table in ("vrtx", "trgl"):
+        assert gconn.execute(
+            f"SELECT revision, lastrevs FROM tgsis.{table}_chunk WHERE geoid = %s", (fid,)
+        ).fetchall() == [(0, [])]
+    assert _one(gconn, "SELECT count(*) FROM tgsis.revision_objects WHERE objectkey = %s::text", (fid,)) == 0
+    with tgsis.in_version(gconn, "draft"):
+        assert _one(gconn, "SELECT ST_AsText(tgsis.postgis_geometry('wells', %s))", (fid,)) == tin
+    stored = _one(gconn, "SELECT count(*) FROM tgsis.vrtx_chunk")
+    tgsis.goto_version(gconn, "draft")
+    with pytest.raises(tgsis.Error) as err:
+        _one(gconn, "SELECT tgsis.insert_postgis_feature('wells', %s::geometry)", (tin,))
+    assert err.value.sqlstate == "TG305", err.value
+    tgsis.goto_version(gconn, "DEFAULT")
+    assert _one(gconn, "SELECT count(*) FROM tgsis.vrtx_chunk") == stored

@@ -14,11 +14,11 @@
 -- A side is a geometry read as the session sees it (revisions NULL) or,
 -- with a revision set, from the versioned storage with the predicate of
 -- tgsis.rows_at, restricted to the geometry's rows by the index (rows_at
--- itself would return every geometry's rows). A table stored in chunks
--- (tgsis.stored_in_chunks) is read at a revision set from its decoded chunk
--- versions (tgsis.<table>_chunk_rows: the chunk version's revision and
--- lastrevs on each row, the geoid filter on the chunk table's key), with
--- the same predicate: only that object's chunks are decoded. Both must exist and be
+-- itself would return every geometry's rows). The stored row versions are
+-- named by tgsis.storage_row_versions: <table>_ver, or for a table stored in
+-- chunks its decoded chunk versions (the chunk version's revision and
+-- lastrevs on each row, the geoid filter on the chunk table's key), read
+-- with the same predicate: only that object's chunks are decoded. Both must exist and be
 -- static geometries of one geotype other than GEOMETRYCOLLECTION
 -- (tgsis.comparable_geometry; seen_in ends its messages).
 --
@@ -85,13 +85,12 @@ BEGIN
         v_filter := CASE WHEN v_set IS NULL THEN format('v.geoid = $%s', 2 * v_side - 1)
                          ELSE format('v.geoid = $%s AND (v.revision = ANY ($%s)) IS TRUE '
                                      'AND (NOT v.revclosed OR NOT (v.lastrevs && $%2$s))', 2 * v_side - 1, 2 * v_side) END;
-        v_vrtx[v_side] := format('SELECT v.vrtxid AS id, v.x, v.y, v.z FROM tgsis.%I v WHERE %s',
-                                 CASE WHEN v_set IS NULL THEN 'vrtx'
-                                      WHEN tgsis.stored_in_chunks('vrtx') THEN 'vrtx_chunk_rows' ELSE 'vrtx_ver' END, v_filter);
-        v_cells[v_side] := format('SELECT v.%I AS id, %s FROM tgsis.%I v WHERE %s', v_cellid, v_cols,
-                                  CASE WHEN v_set IS NULL THEN v_table
-                                       WHEN tgsis.stored_in_chunks(v_table) THEN v_table || '_chunk_rows'
-                                       ELSE v_table || '_ver' END, v_filter);
+        v_vrtx[v_side] := format('SELECT v.vrtxid AS id, v.x, v.y, v.z FROM %s v WHERE %s',
+                                 CASE WHEN v_set IS NULL THEN 'tgsis.vrtx' ELSE tgsis.storage_row_versions('tgsis', 'vrtx') END,
+                                 v_filter);
+        v_cells[v_side] := format('SELECT v.%I AS id, %s FROM %s v WHERE %s', v_cellid, v_cols,
+                                  CASE WHEN v_set IS NULL THEN format('tgsis.%I', v_table)
+                                       ELSE tgsis.storage_row_versions('tgsis', v_table) END, v_filter);
     END LOOP;
 
     -- a cell's key: its vertex ids ascending (least/greatest sorting networks) and whether its

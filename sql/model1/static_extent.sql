@@ -8,7 +8,8 @@
 -- the unnested coordinate arrays (min and max skip the holes' NULLs): the
 -- face would decode every vertex and cell of the object to count them, and
 -- every write path (upload, check-in, merge) recounts. The chunk tables'
--- row-level security gives the caller what the face would.
+-- row-level security gives the caller what the face would; a role that may
+-- read the faces but not the chunk tables reads through the faces.
 CREATE FUNCTION tgsis.static_extent(p_geoid bigint)
 RETURNS TABLE (bbox cube, nvrtx bigint, ncell bigint)
 LANGUAGE plpgsql
@@ -21,7 +22,9 @@ DECLARE
     v_vis   text := '($2 IS NULL OR ((c.revision = ANY ($2)) IS TRUE AND (NOT c.revclosed OR NOT (c.lastrevs && $2))))';
 BEGIN
     SELECT tgsis.simplex_table(g.geotype) INTO v_table FROM tgsis.geometry g WHERE g.geoid = p_geoid;
-    IF tgsis.stored_in_chunks('vrtx') AND tgsis.stored_in_chunks(v_table) THEN
+    IF tgsis.stored_in_chunks('vrtx') AND tgsis.stored_in_chunks(v_table)
+       -- a role granted the faces only (not the storage) counts through them, as before the switch
+       AND has_table_privilege('tgsis.vrtx_chunk', 'SELECT') AND has_table_privilege(format('tgsis.%I', v_table || '_chunk'), 'SELECT') THEN
         IF EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = 'vrtx') THEN
             v_set := tgsis.get_revisions(true);
         END IF;

@@ -6,7 +6,9 @@
 -- the storage switch makes tgsis.vrtx_chunk the storage
 -- (tgsis.stored_in_chunks: not merely once the chunk table exists, which
 -- tgsis.rows_to_chunks fills while the rows stay the storage) it reads
--- today's rows (tgsis.vrtx). Visibility and rights as tgsis.vertex.
+-- today's rows (tgsis.vrtx); so does a role that may read the face
+-- tgsis.vrtx but not the chunk table (correct, at the cost of a scan of
+-- the object). Visibility and rights as tgsis.vertex.
 CREATE FUNCTION tgsis.vertices(p_geoid bigint, p_ids bigint[])
 RETURNS TABLE (vrtxid bigint, x double precision, y double precision, z double precision)
 LANGUAGE plpgsql
@@ -18,7 +20,8 @@ DECLARE
     v_size bigint;
     v_set  integer[];
 BEGIN
-    IF NOT tgsis.stored_in_chunks('vrtx') THEN
+    IF NOT tgsis.stored_in_chunks('vrtx') OR NOT has_table_privilege('tgsis.vrtx_chunk', 'SELECT') THEN
+        -- rows; or a role granted the face but not the chunk table: through the face (a scan of the object)
         RETURN QUERY
         SELECT u.id, v.x, v.y, v.z
           FROM unnest(p_ids) WITH ORDINALITY AS u(id, o) JOIN tgsis.vrtx v ON v.geoid = p_geoid AND v.vrtxid = u.id

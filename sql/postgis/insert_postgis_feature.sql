@@ -8,6 +8,12 @@
 -- nothing behind. It runs as the caller (an editor writes features). Only
 -- static classes without vertex or cell properties: the geometry carries
 -- none, and a temporal class needs its instants (use Python's insert_feature).
+-- Model 1 stored in chunks (tgsis.stored_in_chunks): the new object's
+-- vertices and cells go in with one call per table of tgsis.write_object_rows
+-- (the bulk writer of chunks with the row path's checks: the face's INSERT
+-- privilege, the class's write right, the version's, the revision, the note of
+-- the changed object), not row by row through the face, whose INSTEAD OF
+-- trigger rewrites a chunk per row.
 CREATE FUNCTION tgsis.insert_postgis_feature(p_class text, p_geom anyelement, p_properties jsonb DEFAULT '{}',
                                              p_name text DEFAULT NULL)
 RETURNS bigint
@@ -21,6 +27,7 @@ DECLARE
     v_geoid bigint;
     v_extra text[];
     v_bad   bigint;
+    v_table text;
 BEGIN
     IF v_class.timemodel <> 'STATIC' THEN
         RAISE EXCEPTION 'feature class % is %: its features have instants, which a PostGIS geometry does not give', p_class,
@@ -60,21 +67,40 @@ BEGIN
     END IF;
 
     v_geoid := tgsis.new_geometry(v_class.geotype, p_name, NULL, 0, 0, p_class => v_class.classname);
-    INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z)
-    SELECT v_geoid, i - 1, v_mesh.vertices[i][1], v_mesh.vertices[i][2], v_mesh.vertices[i][3]
-      FROM generate_subscripts(v_mesh.vertices, 1) i;
-    CASE v_class.geotype
-    WHEN 'SURFACE' THEN
-        INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3)
-        SELECT v_geoid, i - 1, v_mesh.cells[i][1], v_mesh.cells[i][2], v_mesh.cells[i][3]
-          FROM generate_subscripts(v_mesh.cells, 1) i;
-    WHEN 'MULTILINESTRING' THEN
-        INSERT INTO tgsis.segment (geoid, segid, vrtxid1, vrtxid2)
-        SELECT v_geoid, i - 1, v_mesh.cells[i][1], v_mesh.cells[i][2] FROM generate_subscripts(v_mesh.cells, 1) i;
+    v_table := tgsis.simplex_table(v_class.geotype);
+    IF tgsis.stored_in_chunks('vrtx') AND tgsis.stored_in_chunks(v_table) THEN
+        -- the tables' columns as rows of (columns x ids) arrays: the mesh's (ids x columns) transposed
+        PERFORM tgsis.write_object_rows(
+                    'vrtx', v_geoid, '{}', ARRAY(SELECT i - 1 FROM generate_subscripts(v_mesh.vertices, 1) i ORDER BY i),
+                    (SELECT array_agg(c.a ORDER BY c.j)
+                       FROM (SELECT j, array_agg(v_mesh.vertices[i][j] ORDER BY i) AS a
+                               FROM generate_subscripts(v_mesh.vertices, 1) i, generate_subscripts(v_mesh.vertices, 2) j
+                              GROUP BY j) c))
+          WHERE array_length(v_mesh.vertices, 1) > 0;
+        PERFORM tgsis.write_object_rows(
+                    v_table, v_geoid, '{}', ARRAY(SELECT i - 1 FROM generate_subscripts(v_mesh.cells, 1) i ORDER BY i), NULL,
+                    (SELECT array_agg(c.a ORDER BY c.j)
+                       FROM (SELECT j, array_agg(v_mesh.cells[i][j] ORDER BY i) AS a
+                               FROM generate_subscripts(v_mesh.cells, 1) i, generate_subscripts(v_mesh.cells, 2) j
+                              GROUP BY j) c))
+          WHERE array_length(v_mesh.cells, 1) > 0;
     ELSE
-        INSERT INTO tgsis.point (geoid, pointid, vrtxid1)
-        SELECT v_geoid, i - 1, v_mesh.cells[i][1] FROM generate_subscripts(v_mesh.cells, 1) i;
-    END CASE;
+        INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z)
+        SELECT v_geoid, i - 1, v_mesh.vertices[i][1], v_mesh.vertices[i][2], v_mesh.vertices[i][3]
+          FROM generate_subscripts(v_mesh.vertices, 1) i;
+        CASE v_class.geotype
+        WHEN 'SURFACE' THEN
+            INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3)
+            SELECT v_geoid, i - 1, v_mesh.cells[i][1], v_mesh.cells[i][2], v_mesh.cells[i][3]
+              FROM generate_subscripts(v_mesh.cells, 1) i;
+        WHEN 'MULTILINESTRING' THEN
+            INSERT INTO tgsis.segment (geoid, segid, vrtxid1, vrtxid2)
+            SELECT v_geoid, i - 1, v_mesh.cells[i][1], v_mesh.cells[i][2] FROM generate_subscripts(v_mesh.cells, 1) i;
+        ELSE
+            INSERT INTO tgsis.point (geoid, pointid, vrtxid1)
+            SELECT v_geoid, i - 1, v_mesh.cells[i][1] FROM generate_subscripts(v_mesh.cells, 1) i;
+        END CASE;
+    END IF;
     PERFORM tgsis.refresh_geometry(v_geoid);
     EXECUTE format('INSERT INTO %I.%I SELECT * FROM jsonb_populate_record(NULL::%I.%I, $1)',
                    v_class.schemaname, v_class.featuretable, v_class.schemaname, v_class.featuretable)
