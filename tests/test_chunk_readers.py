@@ -289,3 +289,11 @@ def test_a_role_granted_the_faces_only_counts_through_them(conn: Conn, db_dsn: s
         keyed = "SELECT vrtxid, x, y, z FROM tgsis.vertices(%s, ARRAY[1599, 0, 7, 1600])"
         assert other.execute(keyed, (geoid,)).fetchall() == conn.execute(keyed, (geoid,)).fetchall() != []
         assert other.execute("SELECT count(*) FROM tgsis.vertex(%s, 0)", (secret,)).fetchone() == (0,)
+
+
+def test_the_extent_of_a_geometry_that_is_not_there_is_refused_by_name(conn: Conn) -> None:
+    # (it failed with "null values cannot be formatted as an SQL identifier", on rows as on chunks)
+    with pytest.raises(psycopg.Error, match="geometry 987654 does not exist") as caught:
+        conn.execute("SELECT * FROM tgsis.static_extent(987654)")
+    assert caught.value.sqlstate == "TG200"
+    conn.rollback()

@@ -22,6 +22,10 @@ DECLARE
     v_vis   text := '($2 IS NULL OR ((c.revision = ANY ($2)) IS TRUE AND (NOT c.revclosed OR NOT (c.lastrevs && $2))))';
 BEGIN
     SELECT tgsis.simplex_table(g.geotype) INTO v_table FROM tgsis.geometry g WHERE g.geoid = p_geoid;
+    IF v_table IS NULL THEN  -- none, or not in the session's version, or not the caller's to read
+        RAISE EXCEPTION 'geometry % does not exist in this version', coalesce(p_geoid::text, 'NULL')
+            USING ERRCODE = 'TG200', HINT = 'give the id of a stored geometry the session can read';
+    END IF;
     IF tgsis.stored_in_chunks('vrtx') AND tgsis.stored_in_chunks(v_table)
        -- a role granted the faces only (not the storage) counts through them, as before the switch
        AND has_table_privilege('tgsis.vrtx_chunk', 'SELECT') AND has_table_privilege(format('tgsis.%I', v_table || '_chunk'), 'SELECT') THEN
