@@ -213,7 +213,7 @@ def _scenario(conn: Conn) -> list[tuple[str, Any]]:
             mesh = checked.mesh.copy()
             mesh.vertices[5, 0] += 0.5
             result = tgsis.checkin(conn, checked, mesh, on_conflict="merge")
-            return (result.merged, result.rows_written)
+            return (result.merged, result.conflict, result.save.rows_written, result.not_applied)
 
         rec.step("checkin v2", in_version("v2", checkin_v2))
     rec.step("refresh v2", lambda: tgsis.refresh_version(conn, "v2"))
