@@ -387,3 +387,87 @@ def test_a_role_without_delete_cannot_change_stored_rows(conn: Conn, db_dsn: str
     now = F.fetch_feature(conn, "horizons", geoid).mesh
     conn.commit()
     assert now.vertices.tobytes() == base.vertices.tobytes()
+
+
+FACE_STATEMENTS = [
+    # UPDATE ... FROM across the chunk boundary
+    "UPDATE tgsis.vrtx v SET z = v.z + t.dz FROM (VALUES (1023, 1.0), (1024, 2.0), (0, -0.0)) t(id, dz)"
+    " WHERE v.geoid = {g} AND v.vrtxid = t.id RETURNING v.vrtxid, float8send(v.z)",
+    # UPDATE ... FROM matching one row twice
+    "UPDATE tgsis.vrtx v SET z = t.z FROM (VALUES (7, 1.0), (7, 2.0)) t(id, z) WHERE v.geoid = {g} AND v.vrtxid = t.id",
+    # DELETE ... USING across the boundary
+    "DELETE FROM tgsis.vrtx v USING (VALUES (1022), (1025)) t(id) WHERE v.geoid = {g} AND v.vrtxid = t.id"
+    " RETURNING v.vrtxid",
+    # a writable CTE moving a vertex to a new id in a new chunk
+    "WITH d AS (DELETE FROM tgsis.vrtx WHERE geoid = {g} AND vrtxid = 5 RETURNING *)"
+    " INSERT INTO tgsis.vrtx SELECT geoid, 3000, x, y, z FROM d RETURNING vrtxid",
+    # two CTEs updating different rows of one chunk
+    "WITH a AS (UPDATE tgsis.vrtx SET x = 100 WHERE geoid = {g} AND vrtxid = 10 RETURNING vrtxid),"
+    " b AS (UPDATE tgsis.vrtx SET x = 200 WHERE geoid = {g} AND vrtxid = 11 RETURNING vrtxid)"
+    " SELECT (SELECT count(*) FROM a) + (SELECT count(*) FROM b)",
+    # two CTEs updating the same row
+    "WITH a AS (UPDATE tgsis.vrtx SET y = 1 WHERE geoid = {g} AND vrtxid = 12 RETURNING vrtxid),"
+    " b AS (UPDATE tgsis.vrtx SET y = 2 WHERE geoid = {g} AND vrtxid = 12 RETURNING vrtxid)"
+    " SELECT (SELECT count(*) FROM a) + (SELECT count(*) FROM b)",
+    # a key change across the boundary and onto a stored key
+    "UPDATE tgsis.vrtx SET vrtxid = vrtxid + 2000 WHERE geoid = {g} AND vrtxid BETWEEN 1020 AND 1030 RETURNING vrtxid",
+    "UPDATE tgsis.vrtx SET vrtxid = vrtxid + 1 WHERE geoid = {g} AND vrtxid IN (40, 41)",
+    # a delete then an insert of the same key in one statement
+    "WITH d AS (DELETE FROM tgsis.vrtx WHERE geoid = {g} AND vrtxid = 50 RETURNING *)"
+    " INSERT INTO tgsis.vrtx SELECT geoid, vrtxid, x + 1, y, z FROM d",
+    # an insert of a stored key, and of one far above (a chunk full of holes)
+    "INSERT INTO tgsis.vrtx VALUES ({g}, 60, 0, 0, 0)",
+    "INSERT INTO tgsis.vrtx VALUES ({g}, 1048575, 1, 2, 3) RETURNING *",
+    # every vertex of chunk 1 deleted, then the object's last vertex
+    "DELETE FROM tgsis.vrtx WHERE geoid = {g} AND vrtxid >= 1024 AND vrtxid < 2048",
+    # an UPDATE through a subquery of the face itself
+    "UPDATE tgsis.vrtx SET z = (SELECT max(z) FROM tgsis.vrtx WHERE geoid = {g}) WHERE geoid = {g} AND vrtxid < 3",
+]
+
+
+def _face_answers(conn: Conn, geoid: int, version: str) -> list[Any]:
+    answers: list[Any] = []
+    with tgsis.in_version(conn, version):
+        conn.commit()
+        for statement in FACE_STATEMENTS:
+            text = statement.format(g=geoid)
+            try:
+                cur = conn.execute(text)
+                got = cur.fetchall() if cur.description else cur.rowcount
+                conn.commit()
+                answers.append((text, "ran", sorted(got) if isinstance(got, list) else got))
+            except psycopg.Error as exc:
+                conn.rollback()
+                answers.append((text, "refused", exc.sqlstate))
+            rows = conn.execute(
+                "SELECT vrtxid, float8send(x), float8send(y), float8send(z) FROM tgsis.vrtx WHERE geoid = %s ORDER BY 1",
+                (geoid,),
+            ).fetchall()
+            conn.commit()
+            answers.append((text, "state", rows))
+    diff = sorted(map(repr, tgsis.diff_versions(conn, version, "DEFAULT")))
+    conn.commit()
+    answers.append(("diff", diff))
+    return answers
+
+
+@pytest.mark.parametrize("version", ["DEFAULT", "v1"])
+def test_statement_shapes_through_the_face_answer_as_on_rows(
+    conn: Conn, make_database: Callable[..., str], template_db: str, version: str
+) -> None:
+    """UPDATE ... FROM, DELETE ... USING, writable CTEs, key changes on the face: the same answers as the row view."""
+    results = []
+    with psycopg.connect(make_database(template_db)) as other:
+        for db, chunks in ((conn, False), (other, True)):
+            F.create_feature_class(db, "horizons", "SURFACE", cell_properties={"porosity": "float8"})
+            tgsis.enable_feature_versioning(db)
+            geoid = F.insert_feature(db, "horizons", _grid(33, 5, "grid"))
+            tgsis.create_version(db, "v1")
+            db.commit()
+            if chunks:
+                _switch(db)
+            results.append(_face_answers(db, geoid, version))
+    rows, chunks = results
+    assert len(rows) == len(chunks)
+    differing = [(a, b) for a, b in zip(rows, chunks, strict=True) if a != b]
+    assert not differing, [(a[:2], str(a[2:])[:300], str(b[2:])[:300]) for a, b in differing[:4]]
