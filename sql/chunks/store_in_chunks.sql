@@ -14,7 +14,8 @@
 --    of the relation it replaces, and the row storage is dropped: the table,
 --    or the versioned view, its <table>_ver, write queue, write function and
 --    runner. A versioned table stays registered (tgsis.versioned_tables): the
---    chunk table is its storage (tgsis.storage_table), the face decides
+--    chunk table is its storage (tgsis.storage_table), guarded as its
+--    <table>_ver was (tgsis.guard_chunk_storage), the face decides
 --    visibility at each read.
 -- Views of the users' own over the table block the drop (PostgreSQL names
 -- them, nothing changes). Refused by name: a table not registered for chunks
@@ -101,6 +102,11 @@ BEGIN
     END IF;
     EXECUTE format('DROP TABLE %s', v_storage);
     EXECUTE format('ALTER VIEW tgsis.%I RENAME TO %I', p_table || '_face', p_table);
+    IF v_versioned.tablename IS NOT NULL THEN
+        -- the chunk table is versioned storage now: guarded as <table>_ver was (a direct INSERT needs the write
+        -- right and may add only open chunk versions of the working revision), as enable_feature_versioning does
+        PERFORM tgsis.guard_chunk_storage(p_table);
+    END IF;
     RETURN v_n;
 END
 $$;
