@@ -627,3 +627,49 @@ def test_roles_cannot_reach_the_chunk_storage_around_the_checks(conn: Conn, chun
         assert _outcome(ed, old, (chunked,)) == "TG002"
     after = conn.execute("SELECT count(*), sum(cardinality(x)) FROM tgsis.vrtx_chunk").fetchone()
     assert after == before
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="unversioned chunk storage takes a role's direct INSERT of any revision and lastrevs: the face "
+    "hides it, fetch_feature then refuses the object (InvalidInputError: a chunk twice) and "
+    "enable_feature_versioning can make it visible; a direct INSERT into an unversioned chunk table "
+    "must be refused unless revision = 0 and lastrevs = '{}' and no version of the chunk is stored "
+    "(a statement trigger like tgsis.storage_rows_check, kept while the table is not versioned)",
+)
+def test_an_editor_cannot_add_a_second_version_of_a_chunk_in_unversioned_storage(conn: Conn, db_dsn: str) -> None:
+    """Unversioned storage has one chunk version per chunk, revision 0 and open; a direct INSERT of another one.
+
+    On rows the table's primary key refuses a second row of a key (23505); on chunks the key is
+    (geoid, chunk, revision): a chunk version of revision 1, or closed, is another key.
+    """
+    F.create_feature_class(conn, "horizons", "SURFACE", cell_properties={"porosity": "float8"})
+    geoid = F.insert_feature(conn, "horizons", _grid(33, 8, "grid"))
+    conn.commit()
+    _switch(conn)
+    before = conn.execute("SELECT count(*) FROM tgsis.vrtx WHERE geoid = %s", (geoid,)).fetchone()
+    conn.commit()
+    with login_roles(db_dsn, {"ed": "tgsis_editor"}) as made:
+        ed = made.connect("ed")
+        ran = [
+            statement
+            for statement in (
+                "INSERT INTO tgsis.vrtx_chunk (geoid, chunk, revision, x, y, z) VALUES (%s, 0, 1, '{1}', '{2}', '{3}')",
+                "INSERT INTO tgsis.vrtx_chunk (geoid, chunk, revision, lastrevs, x, y, z) "
+                "VALUES (%s, 0, 2, '{3}', '{1}', '{2}', '{3}')",
+            )
+            if _outcome(ed, statement, (geoid,)) is None
+        ]
+        # what they leave behind, committed: the readers and a later enable_feature_versioning
+        for statement in ran:
+            ed.execute(statement, (geoid,))
+        ed.commit()
+    seen = [conn.execute("SELECT count(*) FROM tgsis.vrtx WHERE geoid = %s", (geoid,)).fetchone()]
+    seen.append((F.fetch_feature(conn, "horizons", geoid).mesh.n_vertices,))  # type: ignore[union-attr]
+    conn.commit()
+    tgsis.enable_feature_versioning(conn)
+    conn.commit()
+    seen.append(conn.execute("SELECT count(*) FROM tgsis.vrtx WHERE geoid = %s", (geoid,)).fetchone())
+    seen.append((F.fetch_feature(conn, "horizons", geoid).mesh.n_vertices,))  # type: ignore[union-attr]
+    conn.commit()
+    assert not ran and seen == [before] * 4, (ran, seen, before)
