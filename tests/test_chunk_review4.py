@@ -422,6 +422,16 @@ FACE_STATEMENTS = [
     "INSERT INTO tgsis.vrtx VALUES ({g}, 1048575, 1, 2, 3) RETURNING *",
     # every vertex of chunk 1 deleted, then the object's last vertex
     "DELETE FROM tgsis.vrtx WHERE geoid = {g} AND vrtxid >= 1024 AND vrtxid < 2048",
+    # an update and a delete of one row in one statement; an update and an insert into its chunk
+    "WITH a AS (UPDATE tgsis.vrtx SET y = 5 WHERE geoid = {g} AND vrtxid = 13 RETURNING vrtxid),"
+    " b AS (DELETE FROM tgsis.vrtx WHERE geoid = {g} AND vrtxid = 13 RETURNING vrtxid)"
+    " SELECT (SELECT count(*) FROM a) + (SELECT count(*) FROM b)",
+    "WITH a AS (UPDATE tgsis.vrtx SET y = 6 WHERE geoid = {g} AND vrtxid = 14 RETURNING vrtxid),"
+    " b AS (INSERT INTO tgsis.vrtx VALUES ({g}, 1022, 1, 1, 1) RETURNING vrtxid)"
+    " SELECT (SELECT count(*) FROM a) + (SELECT count(*) FROM b)",
+    "WITH a AS (INSERT INTO tgsis.vrtx VALUES ({g}, 1025, 2, 2, 2) RETURNING vrtxid),"
+    " b AS (UPDATE tgsis.vrtx SET y = 7 WHERE geoid = {g} AND vrtxid IN (15, 1025) RETURNING vrtxid)"
+    " SELECT (SELECT count(*) FROM a) + (SELECT count(*) FROM b)",
     # an UPDATE through a subquery of the face itself
     "UPDATE tgsis.vrtx SET z = (SELECT max(z) FROM tgsis.vrtx WHERE geoid = {g}) WHERE geoid = {g} AND vrtxid < 3",
 ]
