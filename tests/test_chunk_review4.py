@@ -759,3 +759,64 @@ def test_a_class_without_versioning_answers_as_on_rows(
         chunks = _unversioned_day(other)
     differing = [(a[:3], b[:3]) for a, b in zip(rows, chunks, strict=True) if a != b]
     assert not differing, (differing[:4], [a for a in rows if "refused" in a])
+
+
+def _two_checkins(dsn: str, geoid: int, on_conflict: str) -> list[Any]:
+    first, second = psycopg.connect(dsn), psycopg.connect(dsn)
+    watch = psycopg.connect(dsn, autocommit=True)
+    outcome: list[Any] = []
+    try:
+        checked = tgsis.checkout(first, geoid)
+        first.commit()
+        ann, bob = checked.mesh.copy(), checked.mesh.copy()
+        assert isinstance(ann, tgsis.Surface) and isinstance(bob, tgsis.Surface)
+        ann.vertices[3, 2] = 21.0
+        ann.vertex_properties["porosity"][1030] = 0.5
+        bob.vertices[1000, 2] = 22.0  # chunk 0, as Ann's vertex
+        bob.vertices[1030, 0] = 23.0  # chunk 1: the vertex whose property Ann changed
+
+        def run() -> None:
+            try:
+                result = tgsis.checkin(second, checked, bob, on_conflict=on_conflict)
+                second.commit()
+                outcome.append(("ran", result.merged, result.conflict, result.not_applied))
+            except (tgsis.Error, psycopg.Error) as exc:
+                second.rollback()
+                outcome.append(("refused", type(exc).__name__))
+
+        result = tgsis.checkin(first, checked, ann, on_conflict=on_conflict)
+        outcome.append(("first", result.merged, result.conflict))
+        thread = threading.Thread(target=run)
+        thread.start()
+        _blocked_or_done(watch, second.info.backend_pid, thread)
+        first.commit()
+        thread.join(60)
+        assert not thread.is_alive()
+        mesh = F.fetch_feature(first, "horizons", geoid).mesh
+        first.commit()
+        assert isinstance(mesh, tgsis.Surface)
+        outcome.append((mesh.vertices.tobytes(), mesh.vertex_properties["porosity"].tobytes(), mesh.cells.tobytes()))
+        return outcome
+    finally:
+        first.close()
+        second.close()
+        watch.close()
+
+
+@pytest.mark.parametrize("on_conflict", ["merge", "raise", "child"])
+def test_two_check_ins_of_one_object_at_once_end_as_on_rows(
+    conn: Conn, db_dsn: str, make_database: Callable[..., str], template_db: str, on_conflict: str
+) -> None:
+    """Two sessions check in edits of one check-out; the second waits for the first and merges by region (or fails)."""
+    results = []
+    for dsn, chunks in ((db_dsn, False), (make_database(template_db), True)):
+        with psycopg.connect(dsn) as db:
+            F.create_feature_class(db, "horizons", "SURFACE", cell_properties={"porosity": "float8"})
+            tgsis.enable_feature_versioning(db)
+            geoid = F.insert_feature(db, "horizons", _grid(33, 10, "grid"))
+            db.commit()
+            if chunks:
+                _switch(db)
+        results.append(_two_checkins(dsn, geoid, on_conflict))
+    assert results[0][:2] == results[1][:2]
+    assert results[0][2] == results[1][2]
