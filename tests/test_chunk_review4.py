@@ -13,7 +13,7 @@ from __future__ import annotations
 import threading
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import psycopg
@@ -388,6 +388,7 @@ def test_a_role_without_delete_cannot_change_stored_rows(conn: Conn, db_dsn: str
             )
     now = F.fetch_feature(conn, "horizons", geoid).mesh
     conn.commit()
+    assert isinstance(now, tgsis.Surface)
     assert now.vertices.tobytes() == base.vertices.tobytes()
 
 
@@ -479,9 +480,9 @@ def test_statement_shapes_through_the_face_answer_as_on_rows(
             if chunks:
                 _switch(db)
             results.append(_face_answers(db, geoid, version))
-    rows, chunks = results
-    assert len(rows) == len(chunks)
-    differing = [(a, b) for a, b in zip(rows, chunks, strict=True) if a != b]
+    on_rows, on_chunks = results
+    assert len(on_rows) == len(on_chunks)
+    differing = [(a, b) for a, b in zip(on_rows, on_chunks, strict=True) if a != b]
     assert not differing, [(a[:2], str(a[2:])[:300], str(b[2:])[:300]) for a, b in differing[:4]]
 
 
@@ -692,9 +693,7 @@ def _unversioned_day(conn: Conn) -> list[Any]:
     tgsis.enable_feature_versioning(conn)
     grid = F.insert_feature(conn, "horizons", _grid(32, 9, "grid"))
     one = F.insert_feature(conn, "wells", tgsis.PointSet(np.array([[1.0, 2.0, -0.0]]), name="one"))
-    many = F.insert_feature(
-        conn, "wells", tgsis.PointSet(np.random.default_rng(3).random((1025, 3)), name="many")
-    )
+    many = F.insert_feature(conn, "wells", tgsis.PointSet(np.random.default_rng(3).random((1025, 3)), name="many"))
     tgsis.create_version(conn, "v1")
     conn.commit()
     answers: list[Any] = []
@@ -761,7 +760,7 @@ def test_a_class_without_versioning_answers_as_on_rows(
     assert not differing, (differing[:4], [a for a in rows if "refused" in a])
 
 
-def _two_checkins(dsn: str, geoid: int, on_conflict: str) -> list[Any]:
+def _two_checkins(dsn: str, geoid: int, on_conflict: Literal["raise", "child", "merge"]) -> list[Any]:
     first, second = psycopg.connect(dsn), psycopg.connect(dsn)
     watch = psycopg.connect(dsn, autocommit=True)
     outcome: list[Any] = []
@@ -805,7 +804,11 @@ def _two_checkins(dsn: str, geoid: int, on_conflict: str) -> list[Any]:
 
 @pytest.mark.parametrize("on_conflict", ["merge", "raise", "child"])
 def test_two_check_ins_of_one_object_at_once_end_as_on_rows(
-    conn: Conn, db_dsn: str, make_database: Callable[..., str], template_db: str, on_conflict: str
+    conn: Conn,
+    db_dsn: str,
+    make_database: Callable[..., str],
+    template_db: str,
+    on_conflict: Literal["raise", "child", "merge"],
 ) -> None:
     """Two sessions check in edits of one check-out; the second waits for the first and merges by region (or fails)."""
     results = []
