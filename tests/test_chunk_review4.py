@@ -917,6 +917,7 @@ def test_saves_of_one_chunk_in_two_versions_at_once_keep_both(
             watch.close()
         results.append(outcome)
     assert results[0] == results[1]
+    assert isinstance(mesh, tgsis.Surface)
     expected_child, expected_parent = mesh.vertices.copy(), mesh.vertices.copy()
     expected_child[2, 2], expected_parent[3, 2] = 31.0, 32.0
     assert results[1][1:] == [("v1", expected_child.tobytes(), (0,)), ("DEFAULT", expected_parent.tobytes(), (0,))]
@@ -947,11 +948,12 @@ def test_a_save_under_another_isolation_level_answers_as_on_rows(
             db.execute(f"SET default_transaction_isolation = '{isolation}'")
             db.commit()
             answers: list[Any] = []
+            actions: list[tuple[str, Callable[[], Any]]]
             mesh = F.fetch_feature(db, "horizons", geoid).mesh
             db.commit()
             assert isinstance(mesh, tgsis.Surface)
             mesh.vertices[1024, 2] = 41.0
-            for label, action in (
+            actions = [
                 ("save", lambda: tgsis.save_feature(db, "horizons", geoid, mesh).rows_written),
                 ("checkout", lambda: tgsis.checkout(db, geoid) is not None),
                 (
@@ -961,7 +963,8 @@ def test_a_save_under_another_isolation_level_answers_as_on_rows(
                     ),
                 ),
                 ("delete", lambda: F.delete_feature(db, "horizons", geoid)),
-            ):
+            ]
+            for label, action in actions:
                 try:
                     answers.append((label, action()))
                     db.commit()
