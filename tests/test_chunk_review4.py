@@ -572,7 +572,7 @@ def _two_sessions(dsn: str, geoid: int, second: Callable[[Conn], Any]) -> tuple[
         watch.close()
 
 
-@pytest.mark.parametrize("second", ["save", "merge", "checkin", "face"])
+@pytest.mark.parametrize("second", ["save", "merge", "checkin", "face", "compress", "refresh", "delete"])
 def test_a_write_while_another_session_writes_through_the_face_ends_as_on_rows(
     conn: Conn, db_dsn: str, make_database: Callable[..., str], template_db: str, second: str
 ) -> None:
@@ -611,6 +611,12 @@ def test_a_write_while_another_session_writes_through_the_face_ends_as_on_rows(
                 edited.vertices[6, 2] = 14.0
                 result = tgsis.checkin(session, checked, edited, on_conflict="merge")
                 return (result.merged, result.conflict)
+            if second == "compress":
+                return sorted(repr((c.what, c.name)) for c in tgsis.compress_versions(session))
+            if second == "refresh":
+                return tgsis.refresh_version(session, "v1").objects
+            if second == "delete":
+                return F.delete_feature(session, "horizons", geoid)
             return session.execute(
                 "UPDATE tgsis.vrtx SET x = 99 WHERE geoid = %s AND vrtxid IN (2, 1029)", (geoid,)
             ).rowcount
