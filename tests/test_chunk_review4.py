@@ -980,3 +980,49 @@ def test_a_save_under_another_isolation_level_answers_as_on_rows(
             results.append(answers)
     assert results[0] == results[1]
     assert results[1][2] == ("face", 1)  # the row view writes (the oracle is chunked too under TGSIS_TEST_STORAGE)
+
+
+def test_a_role_without_the_class_reads_as_much_as_on_rows(
+    conn: Conn, db_dsn: str, make_database: Callable[..., str], template_db: str
+) -> None:
+    """A reader without SELECT on the class: the face, the keyed reads, the storage, the decoded view."""
+    results = []
+    for dsn, chunks in ((db_dsn, False), (make_database(template_db), True)):
+        with psycopg.connect(dsn) as db:
+            F.create_feature_class(db, "horizons", "SURFACE", cell_properties={"porosity": "float8"})
+            tgsis.enable_feature_versioning(db)
+            geoid = F.insert_feature(db, "horizons", _grid(33, 13, "grid"))
+            db.commit()
+            if chunks:
+                _switch(db)
+            db.execute("REVOKE SELECT ON horizons FROM tgsis_reader, PUBLIC")
+            assert db.execute("SELECT count(*) FROM tgsis.vrtx WHERE geoid = %s", (geoid,)).fetchone() == (1089,)
+            db.commit()
+            storage = "tgsis.vrtx_chunk" if chunks else "tgsis.vrtx_ver"
+        answers: list[Any] = []
+        with login_roles(dsn, {"rita": "tgsis_reader"}) as made:
+            rita = made.connect("rita")
+            for label, query in (
+                ("face", "SELECT count(*) FROM tgsis.vrtx WHERE geoid = %s"),
+                ("vertices", "SELECT count(*) FROM tgsis.vertices(%s, ARRAY[0, 1, 1030])"),
+                ("fetch", None),
+                ("storage", f"SELECT count(*) > 0 FROM {storage} WHERE geoid = %s"),
+                ("decoded", "SELECT count(*) FROM tgsis.vrtx_chunk_rows WHERE geoid = %s" if chunks else None),
+                ("diff", "SELECT count(*) FROM tgsis.diff_versions('DEFAULT', 'DEFAULT') WHERE %s IS NOT NULL"),
+                ("rows_at", "SELECT count(*) FROM tgsis.rows_at(NULL::tgsis.vrtx, 'DEFAULT') WHERE geoid = %s"),
+            ):
+                if label == "decoded" and query is None:
+                    answers.append((label, (0,)))
+                    continue
+                try:
+                    if query is None:
+                        mesh = F.fetch_feature(rita, "horizons", geoid).mesh
+                        answers.append((label, mesh is not None))
+                    else:
+                        answers.append((label, rita.execute(query, (geoid,)).fetchone()))
+                    rita.commit()
+                except (tgsis.Error, psycopg.Error) as exc:
+                    rita.rollback()
+                    answers.append((label, "refused", getattr(exc, "sqlstate", None) or type(exc).__name__))
+        results.append(answers)
+    assert results[0] == results[1]
