@@ -280,6 +280,24 @@ def _scenario(conn: Conn) -> list[tuple[str, Any]]:
         return tgsis.save_feature(conn, "horizons", geoids["exact"], _drop_vertices(mesh, [0])).rows_written
 
     rec.step("v3 exact", in_version("v3", v3_exact))
+
+    def nudge(dz: float) -> Callable[[], Any]:
+        def run() -> Any:
+            mesh = fetch("big")
+            mesh.vertices[1030, 2] += dz
+            return tgsis.save_feature(conn, "horizons", geoids["big"], mesh).rows_written
+
+        return run
+
+    # a change in v3 then its undoing: v3 holds DEFAULT's content again
+    rec.step("v3 nudge", in_version("v3", nudge(0.5)))
+    rec.step("v3 unnudge", in_version("v3", nudge(-0.5)))
+    rec.step("diff v3 DEFAULT", lambda: sorted(map(repr, tgsis.diff_versions(conn, "v3", "DEFAULT"))))
+    rec.step("DEFAULT nudge", nudge(0.25))
+    rec.step(
+        "conflicts v3", lambda: sorted(repr((c.objectkey, c.conflicttype)) for c in tgsis.find_conflicts(conn, "v3"))
+    )
+    rec.step("merge v3", lambda: tgsis.merge_version(conn, "v3").objects)
     rec.meshes("end")
     return rec.log
 
