@@ -1016,7 +1016,9 @@ def test_a_role_without_the_class_reads_as_much_as_on_rows(
             db.execute("REVOKE SELECT ON horizons FROM tgsis_reader, PUBLIC")
             assert db.execute("SELECT count(*) FROM tgsis.vrtx WHERE geoid = %s", (geoid,)).fetchone() == (1089,)
             db.commit()
-            storage = "tgsis.vrtx_chunk" if chunks else "tgsis.vrtx_ver"
+            stored = db.execute("SELECT tgsis.stored_in_chunks('vrtx')").fetchone() == (True,)
+            db.commit()
+            storage = "tgsis.vrtx_chunk" if stored else "tgsis.vrtx_ver"
         answers: list[Any] = []
         with login_roles(dsn, {"rita": "tgsis_reader"}) as made:
             rita = made.connect("rita")
@@ -1025,7 +1027,7 @@ def test_a_role_without_the_class_reads_as_much_as_on_rows(
                 ("vertices", "SELECT count(*) FROM tgsis.vertices(%s, ARRAY[0, 1, 1030])"),
                 ("fetch", None),
                 ("storage", f"SELECT count(*) > 0 FROM {storage} WHERE geoid = %s"),
-                ("decoded", "SELECT count(*) FROM tgsis.vrtx_chunk_rows WHERE geoid = %s" if chunks else None),
+                ("decoded", "SELECT count(*) FROM tgsis.vrtx_chunk_rows WHERE geoid = %s" if stored else None),
                 ("diff", "SELECT count(*) FROM tgsis.diff_versions('DEFAULT', 'DEFAULT') WHERE %s IS NOT NULL"),
                 ("rows_at", "SELECT count(*) FROM tgsis.rows_at(NULL::tgsis.vrtx, 'DEFAULT') WHERE geoid = %s"),
             ):
