@@ -20,7 +20,8 @@
 --     new snapshot (READ COMMITTED: what a writer it waited for committed)
 --     and compares the slot it writes with the row the statement read
 --     (binary equality, *=): changed meanwhile is 40001, changed by this
---     transaction since the statement read it is 27000, deleted meanwhile is
+--     transaction since the statement read it is 27000 (deleted by it, too: a
+--     retry would fail again), deleted meanwhile is
 --     skipped (DELETE, UPDATE of the key) as on a plain table. Other slots
 --     keep what concurrent writers committed: the writer merges into the
 --     current chunk. Two face writers of different slots of one chunk wait
@@ -213,7 +214,10 @@ BEGIN
                        '       coalesce(bool_or(s.state = ''mine''), false) '
                        '  FROM %2$s q LEFT JOIN LATERAL (%3$s) s(state) ON true',
                        format(v_keytext, 'q'), v_queue,
-                       format('SELECT CASE WHEN NOT (%1$s) THEN ''absent'' WHEN %2$s OPERATOR(pg_catalog.*=) q.tgsis_old THEN ''same'' '
+                       -- (a slot gone from a chunk version this transaction wrote: deleted by this statement, 27000, not 40001)
+                       format('SELECT CASE WHEN NOT (%1$s) THEN CASE WHEN c.xmin = pg_catalog.xid(pg_catalog.pg_current_xact_id()) '
+                              'THEN ''mine'' ELSE ''absent'' END '
+                              'WHEN %2$s OPERATOR(pg_catalog.*=) q.tgsis_old THEN ''same'' '
                               'WHEN c.xmin = pg_catalog.xid(pg_catalog.pg_current_xact_id()) THEN ''mine'' ELSE ''changed'' END '
                               'FROM %3$s c WHERE %4$s AND %5$s',
                               format(v_present, 'q'), format(v_decoded, 'q'), v_chunk, format(v_match, 'q'), v_vis))

@@ -12,7 +12,8 @@
 -- could rewrite other versions), and tgsis.write_chunk_rows is internal: so
 -- this runs as tgsis's owner after the checks today's row path makes (the
 -- set-based delete tgsis.close_object_rows, the storage's statement triggers):
--- INSERT (new or changed rows) and DELETE (rows that go) on the face
+-- INSERT (new or changed rows) and DELETE (rows that go, and rows changed: on
+-- rows a change is a close and an insert) on the face
 -- tgsis.<table> (42501), the class's write right on the object
 -- (tgsis.check_class_write), the write right on the session's version and
 -- TG301 while an older revision is viewed, TG305 for unversioned storage
@@ -49,6 +50,7 @@ DECLARE
     v_vals    text;
     v_nulls   text;
     v_written bigint;
+    v_stored  bigint;
 BEGIN
     SELECT * INTO v_reg FROM tgsis.model_tables t WHERE t.tablename = p_table AND t.chunkcolumn IS NOT NULL;
     IF NOT FOUND OR NOT tgsis.stored_in_chunks(p_table) THEN
@@ -94,6 +96,20 @@ BEGIN
             USING ERRCODE = 'insufficient_privilege',
                   DETAIL = 'New and changed rows need INSERT on it, rows that go DELETE.',
                   HINT = 'its owner can GRANT INSERT, DELETE on it';
+    END IF;
+    -- a written id that the object holds now is a change: on rows a close and an insert (tgsis.close_object_rows
+    -- asks DELETE), so a role without DELETE may add rows, not rewrite stored ones (read only when it lacks DELETE)
+    IF v_n > 0 AND NOT has_table_privilege(tgsis.calling_role(), v_face::regclass, 'DELETE') THEN
+        EXECUTE format('SELECT (array_agg(f.%2$I))[1] FROM %1$s f WHERE f.%3$I = $1 AND f.%2$I = ANY ($2)',
+                       v_face, v_reg.chunkcolumn, v_reg.keycolumn)
+           INTO v_stored USING p_geoid, p_ids;
+        IF v_stored IS NOT NULL THEN
+            RAISE EXCEPTION 'role % may not write %', quote_ident(tgsis.calling_role()), v_face
+                USING ERRCODE = 'insufficient_privilege',
+                      DETAIL = format('Id %s of object %s is stored: changing a row needs DELETE on it, as on rows.',
+                                      v_stored, p_geoid),
+                      HINT = 'its owner can GRANT INSERT, DELETE on it';
+        END IF;
     END IF;
     PERFORM tgsis.check_class_write(ARRAY[p_geoid], 'UPDATE');
     IF EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table) THEN
