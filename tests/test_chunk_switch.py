@@ -190,6 +190,14 @@ def test_partitioned_storage_is_not_switched(conn: Conn) -> None:
     ).fetchone() == (False, None, "p")
 
 
+def test_storage_in_chunks_is_not_partitioned_and_says_why(conn: Conn) -> None:
+    conn.execute("SELECT tgsis.store_in_chunks('point')")
+    conn.commit()
+    state, message = _sqlstate(conn, "SELECT tgsis.partition_model_storage(1, 4)")
+    assert state == "TG202" and "stored in chunks" in message and "made it a view" not in message, message
+    assert conn.execute("SELECT relkind FROM pg_class WHERE oid = 'tgsis.vrtx'::regclass").fetchone() == ("r",)
+
+
 def test_roles_of_tgsis_may_not_switch(db_dsn: str, conn: Conn, fault_clone: int) -> None:
     with login_roles(db_dsn, {"reader": "tgsis_reader", "editor": "tgsis_editor", "admin": "tgsis_admin"}) as roles:
         for short in ("reader", "editor", "admin"):

@@ -98,7 +98,9 @@ BEGIN
             RAISE EXCEPTION 'tgsis.% is not a plain table', v_table
                 USING ERRCODE = 'TG202',
                       DETAIL = CASE v_kind WHEN 'p' THEN 'it is partitioned already'
-                                           WHEN 'v' THEN 'feature versioning made it a view of tgsis.' || v_table || '_ver'
+                                           WHEN 'v' THEN CASE WHEN tgsis.stored_in_chunks(v_table)
+                                                              THEN 'it is stored in chunks (tgsis.store_in_chunks), whose tables are not partitioned yet'
+                                                              ELSE 'feature versioning made it a view of tgsis.' || v_table || '_ver' END
                                            ELSE 'it is missing' END,
                       HINT = 'partition the model tables once, before storing data and before tgsis.enable_feature_versioning()';
         END IF;
