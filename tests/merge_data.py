@@ -180,3 +180,13 @@ def varied_history(conn: Conn, geoid: int) -> None:
         conn.commit()
     move(conn, "DEFAULT", geoid, [30, 31], (0.0, -1.0, 0.0))
     conn.commit()
+
+
+def sqlstate(conn: Conn, statement: str, params: Any = ()) -> tuple[str | None, str]:
+    """The SQLSTATE and message of a statement run in a savepoint (None, "" when it succeeds)."""
+    try:
+        with conn.transaction():
+            conn.execute(statement, params)
+    except psycopg.Error as exc:
+        return exc.sqlstate, str(exc)
+    return None, ""

@@ -22,7 +22,7 @@ import pytest
 from psycopg import sql
 
 import tgsis
-from tests.merge_data import curved_surface, every_view, move, varied_history
+from tests.merge_data import curved_surface, every_view, move, sqlstate, varied_history
 from tests.roles import login_roles
 from tgsis.db import features as F
 from tgsis.mesh import Surface
@@ -100,15 +100,6 @@ def _convert(conn: Conn, tables: Iterable[str] = MODEL1) -> dict[str, int]:
     return {t: int((conn.execute("SELECT tgsis.rows_to_chunks(%s)", (t,)).fetchone() or (0,))[0]) for t in tables}
 
 
-def _sqlstate(conn: Conn, statement: str, params: Any = ()) -> tuple[str | None, str]:
-    try:
-        with conn.transaction():
-            conn.execute(statement, params)
-    except psycopg.Error as exc:
-        return exc.sqlstate, str(exc)
-    return None, ""
-
-
 def _storage(conn: Conn, table: str) -> str:
     row = conn.execute("SELECT tgsis.storage_table('tgsis', %s)", (table,)).fetchone()
     assert row is not None
@@ -171,7 +162,7 @@ def test_unversioned_rows_become_one_chunk_version_each_with_holes_and_back(conn
     for stray in ("revision = 5", "lastrevs = '{5}'"):
         with conn.transaction(force_rollback=True):
             conn.execute(f"UPDATE tgsis.vrtx_chunk SET {stray} WHERE geoid = %s", (geoid,))
-            assert _sqlstate(conn, "SELECT tgsis.check_chunk_conversion('vrtx')")[0] == "TG000", stray
+            assert sqlstate(conn, "SELECT tgsis.check_chunk_conversion('vrtx')")[0] == "TG000", stray
     before = {t: _chunk_rows(conn, t) for t in MODEL1}
     rows_before = {t: _row_view(conn, t) for t in MODEL1}
     # and back: into the emptied plain storage, then into chunks again
@@ -250,7 +241,7 @@ def test_verification_catches_a_corrupted_chunk_and_the_conversion_changes_nothi
     assert conn.execute(f"UPDATE tgsis.vrtx_chunk SET x[1] = 0.0 {first}", (fault_clone,)).rowcount == 1
     conn.execute("SELECT tgsis.check_chunk_conversion('vrtx')")  # the same bits: no difference
     conn.execute(f"UPDATE tgsis.vrtx_chunk SET x[1] = '-0'::double precision {first}", (fault_clone,))
-    state, message = _sqlstate(conn, "SELECT tgsis.check_chunk_conversion('vrtx')")
+    state, message = sqlstate(conn, "SELECT tgsis.check_chunk_conversion('vrtx')")
     assert state == "TG000"
     assert "vrtx" in message and f"geoid {fault_clone}" in message and "chunk 0" in message and "set" in message
     conn.rollback()
@@ -261,7 +252,7 @@ def test_verification_catches_a_corrupted_chunk_and_the_conversion_changes_nothi
     ):
         _convert(conn, ["vrtx"])
         conn.execute(corruption)
-        assert _sqlstate(conn, "SELECT tgsis.check_chunk_conversion('vrtx')")[0] == "TG000", corruption
+        assert sqlstate(conn, "SELECT tgsis.check_chunk_conversion('vrtx')")[0] == "TG000", corruption
         conn.rollback()
     # a conversion whose result differs (a trigger changes what is written) raises and leaves nothing
     conn.execute(
@@ -269,7 +260,7 @@ def test_verification_catches_a_corrupted_chunk_and_the_conversion_changes_nothi
         "$$BEGIN NEW.vrtxid1[1] := NEW.vrtxid1[1] + 1; RETURN NEW; END$$"
     )
     conn.execute("CREATE TRIGGER nudge BEFORE INSERT ON tgsis.trgl_chunk FOR EACH ROW EXECUTE FUNCTION pg_temp.nudge()")
-    state, message = _sqlstate(conn, "SELECT tgsis.rows_to_chunks('trgl')")
+    state, message = sqlstate(conn, "SELECT tgsis.rows_to_chunks('trgl')")
     assert state == "TG000" and "trgl" in message
     assert conn.execute("SELECT count(*) FROM tgsis.trgl_chunk").fetchone() == (0,)
     conn.execute("DROP TRIGGER nudge ON tgsis.trgl_chunk")
@@ -283,21 +274,21 @@ def test_verification_catches_a_corrupted_chunk_and_the_conversion_changes_nothi
     conn.execute(
         "CREATE TRIGGER nudge BEFORE INSERT ON tgsis.trgl_ver FOR EACH ROW EXECUTE FUNCTION pg_temp.nudge_row()"
     )
-    state, message = _sqlstate(conn, "SELECT tgsis.chunks_to_rows('trgl')")
+    state, message = sqlstate(conn, "SELECT tgsis.chunks_to_rows('trgl')")
     assert state == "TG000" and "chunk 0" in message
     assert conn.execute("SELECT count(*) FROM tgsis.trgl_ver").fetchone() == (0,)
     conn.rollback()
 
 
 def test_refusals_by_name(conn: Conn, fault_clone: int) -> None:
-    assert _sqlstate(conn, "SELECT tgsis.rows_to_chunks('vrtx')")[0] == "TG200"  # no chunk table yet
-    assert _sqlstate(conn, "SELECT tgsis.rows_to_chunks('atom')")[0] == "TG200"  # not stored in chunks
+    assert sqlstate(conn, "SELECT tgsis.rows_to_chunks('vrtx')")[0] == "TG200"  # no chunk table yet
+    assert sqlstate(conn, "SELECT tgsis.rows_to_chunks('atom')")[0] == "TG200"  # not stored in chunks
     _make_chunks(conn, ["vrtx"])
     _convert(conn, ["vrtx"])
     # into chunks that are there, or rows that are there: refused
-    state, message = _sqlstate(conn, "SELECT tgsis.rows_to_chunks('vrtx')")
+    state, message = sqlstate(conn, "SELECT tgsis.rows_to_chunks('vrtx')")
     assert state == "TG201" and "vrtx_chunk" in message
-    state, message = _sqlstate(conn, "SELECT tgsis.chunks_to_rows('vrtx')")
+    state, message = sqlstate(conn, "SELECT tgsis.chunks_to_rows('vrtx')")
     assert state == "TG201" and "vrtx_ver" in message
     conn.rollback()
 
@@ -313,7 +304,7 @@ def test_a_role_without_rights_is_refused(db_dsn: str, conn: Conn, fault_clone: 
                 "SELECT tgsis.chunks_to_rows('vrtx')",
                 "SELECT tgsis.check_chunk_conversion('vrtx')",
             ):
-                assert _sqlstate(session, statement)[0] == "42501", (short, statement)
+                assert sqlstate(session, statement)[0] == "42501", (short, statement)
     assert conn.execute("SELECT count(*) FROM tgsis.vrtx_chunk").fetchone() == (0,)
 
 

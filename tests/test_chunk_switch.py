@@ -16,7 +16,7 @@ import pytest
 from psycopg import sql
 
 import tgsis
-from tests.merge_data import every_view, varied_history
+from tests.merge_data import every_view, sqlstate, varied_history
 from tests.roles import login_roles
 from tgsis.testing import TestServer
 
@@ -67,15 +67,6 @@ def _grants(conn: Conn, table: str) -> set[tuple[str, str]]:
 
 def _switch_all(conn: Conn) -> dict[str, int]:
     return {t: int((conn.execute("SELECT tgsis.store_in_chunks(%s)", (t,)).fetchone() or (0,))[0]) for t in MODEL1}
-
-
-def _sqlstate(conn: Conn, statement: str, params: Any = ()) -> tuple[str | None, str]:
-    try:
-        with conn.transaction():
-            conn.execute(statement, params)
-    except psycopg.Error as exc:
-        return exc.sqlstate, str(exc)
-    return None, ""
 
 
 def test_a_versioned_history_is_seen_the_same_by_every_version_and_revision_after_the_switch(
@@ -145,10 +136,10 @@ def test_an_unversioned_switch_then_versioning_keeps_each_version_its_own_rows(c
 def test_the_shape_holds_no_rows_and_nobody_but_the_owner_reaches_it(conn: Conn, fault_clone: int) -> None:
     _switch_all(conn)
     conn.commit()
-    state, message = _sqlstate(conn, "INSERT INTO tgsis.trgl_shape VALUES (%s, 999999, 0, 1, 2)", (fault_clone,))
+    state, message = sqlstate(conn, "INSERT INTO tgsis.trgl_shape VALUES (%s, 999999, 0, 1, 2)", (fault_clone,))
     assert state == "23514" and "trgl_shape_holds_no_rows" in message
     # its CHECKs are the row table's: the writer still refuses a degenerate triangle through the face
-    state, message = _sqlstate(conn, "INSERT INTO tgsis.trgl VALUES (%s, 999999, 0, 0, 2)", (fault_clone,))
+    state, message = sqlstate(conn, "INSERT INTO tgsis.trgl VALUES (%s, 999999, 0, 0, 2)", (fault_clone,))
     assert state == "23514" and "trgl_distinct_vertices" in message
     assert conn.execute("SELECT count(*) FROM tgsis.trgl_shape").fetchone() == (0,)
     assert _grants(conn, "trgl_shape") == set()
@@ -159,12 +150,12 @@ def test_the_shape_holds_no_rows_and_nobody_but_the_owner_reaches_it(conn: Conn,
 
 
 def test_refusals_change_nothing(conn: Conn, fault_clone: int) -> None:
-    state, message = _sqlstate(conn, "SELECT tgsis.store_in_chunks('atom')")
+    state, message = sqlstate(conn, "SELECT tgsis.store_in_chunks('atom')")
     assert state == "TG200" and "atom" in message
     # a view of the user's own over the table: PostgreSQL names it, nothing is switched
     conn.execute("CREATE VIEW public.my_vertices AS SELECT * FROM tgsis.vrtx")
     conn.commit()
-    state, message = _sqlstate(conn, "SELECT tgsis.store_in_chunks('vrtx')")
+    state, message = sqlstate(conn, "SELECT tgsis.store_in_chunks('vrtx')")
     assert state == "2BP01" and "my_vertices" in message
     assert conn.execute(
         "SELECT tgsis.stored_in_chunks('vrtx'), to_regclass('tgsis.vrtx_chunk'), to_regclass('tgsis.vrtx_shape'), "
@@ -174,7 +165,7 @@ def test_refusals_change_nothing(conn: Conn, fault_clone: int) -> None:
     conn.commit()
     conn.execute("SELECT tgsis.store_in_chunks('vrtx')")
     conn.commit()
-    state, message = _sqlstate(conn, "SELECT tgsis.store_in_chunks('vrtx')")
+    state, message = sqlstate(conn, "SELECT tgsis.store_in_chunks('vrtx')")
     assert state == "TG201" and "stored in chunks already" in message
 
 
@@ -182,7 +173,7 @@ def test_partitioned_storage_is_not_switched(conn: Conn) -> None:
     """A chunk table is plain: switching storage the DBA partitioned would undo the partitioning without a word."""
     tgsis.partition_model_storage(conn, 1, 4)
     conn.commit()
-    state, message = _sqlstate(conn, "SELECT tgsis.store_in_chunks('trgl')")
+    state, message = sqlstate(conn, "SELECT tgsis.store_in_chunks('trgl')")
     assert state == "TG100" and "partitioned" in message
     assert conn.execute(
         "SELECT tgsis.stored_in_chunks('trgl'), to_regclass('tgsis.trgl_chunk'), "
@@ -193,7 +184,7 @@ def test_partitioned_storage_is_not_switched(conn: Conn) -> None:
 def test_storage_in_chunks_is_not_partitioned_and_says_why(conn: Conn) -> None:
     conn.execute("SELECT tgsis.store_in_chunks('point')")
     conn.commit()
-    state, message = _sqlstate(conn, "SELECT tgsis.partition_model_storage(1, 4)")
+    state, message = sqlstate(conn, "SELECT tgsis.partition_model_storage(1, 4)")
     assert state == "TG202" and "stored in chunks" in message and "made it a view" not in message, message
     assert conn.execute("SELECT relkind FROM pg_class WHERE oid = 'tgsis.vrtx'::regclass").fetchone() == ("r",)
 
@@ -203,7 +194,7 @@ def test_roles_of_tgsis_may_not_switch(db_dsn: str, conn: Conn, fault_clone: int
         for short in ("reader", "editor", "admin"):
             session = roles.connect(short)
             for statement in ("SELECT tgsis.store_in_chunks('vrtx')", "SELECT tgsis.row_shape('vrtx')"):
-                assert _sqlstate(session, statement)[0] == "42501", (short, statement)
+                assert sqlstate(session, statement)[0] == "42501", (short, statement)
             # whether a table is stored in chunks is for everybody to ask (tgsis.storage_table asks it)
             assert session.execute("SELECT tgsis.stored_in_chunks('vrtx')").fetchone() == (False,)
     assert conn.execute("SELECT tgsis.stored_in_chunks('vrtx'), to_regclass('tgsis.vrtx_chunk')").fetchone() == (

@@ -18,7 +18,7 @@ import psycopg
 from psycopg import sql
 
 import tgsis
-from tests.merge_data import every_view, move, varied_history
+from tests.merge_data import every_view, move, sqlstate, varied_history
 from tests.roles import login_roles
 
 Conn = psycopg.Connection[Any]
@@ -63,15 +63,6 @@ def seen_by_every_view(conn: Conn) -> dict[tuple[str, int | None], list[tuple[An
 
 def versions_of(conn: Conn) -> list[str]:
     return [str(r[0]) for r in conn.execute("SELECT name FROM tgsis.versions ORDER BY versionid").fetchall()]
-
-
-def sqlstate(conn: Conn, statement: str, params: Any = ()) -> tuple[str | None, str]:
-    try:
-        with conn.transaction():
-            conn.execute(statement, params)
-    except psycopg.Error as exc:
-        return exc.sqlstate, str(exc)
-    return None, ""
 
 
 def test_diffs_rows_at_and_conflict_reports_read_the_same_rows_after_the_switch(conn: Conn, fault_clone: int) -> None:
