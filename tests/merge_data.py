@@ -19,17 +19,17 @@ Conn = psycopg.Connection[Any]
 SIDE = 12
 
 
-def curved_surface() -> tgsis.Surface:
-    """A SIDE x SIDE grid bent into a curved sheet (z = sin x cos y), coordinates with full mantissas."""
-    u, v = np.meshgrid(np.linspace(0.0, 3.1, SIDE), np.linspace(0.0, 2.7, SIDE))
+def curved_surface(side: int = SIDE) -> tgsis.Surface:
+    """A side x side grid bent into a curved sheet (z = sin x cos y), coordinates with full mantissas."""
+    u, v = np.meshgrid(np.linspace(0.0, 3.1, side), np.linspace(0.0, 2.7, side))
     vertices = np.stack([u.ravel() * 1000.3, v.ravel() * 997.1, 150.0 * np.sin(u.ravel()) * np.cos(v.ravel())], axis=1)
-    idx = np.arange(SIDE * SIDE).reshape(SIDE, SIDE)
+    idx = np.arange(side * side).reshape(side, side)
     a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
     cells = np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)])
     return tgsis.Surface(
         vertices,
         cells,
-        vertex_properties={"porosity": np.linspace(0.1, 0.3, SIDE * SIDE)},
+        vertex_properties={"porosity": np.linspace(0.1, 0.3, side * side)},
         cell_properties={"facies": np.arange(len(cells), dtype=np.int32) % 5},
         name="fault",
     )
@@ -190,3 +190,13 @@ def sqlstate(conn: Conn, statement: str, params: Any = ()) -> tuple[str | None, 
     except psycopg.Error as exc:
         return exc.sqlstate, str(exc)
     return None, ""
+
+
+#: model 1's tables stored in chunks: their local-id column and value columns (the chunk tests compare them)
+MODEL1_COLUMNS = {
+    "vrtx": ("vrtxid", ["x", "y", "z"]),
+    "point": ("pointid", ["vrtxid1"]),
+    "segment": ("segid", ["vrtxid1", "vrtxid2"]),
+    "trgl": ("trglid", ["vrtxid1", "vrtxid2", "vrtxid3"]),
+    "tetra": ("tetraid", ["vrtxid1", "vrtxid2", "vrtxid3", "vrtxid4"]),
+}

@@ -22,20 +22,14 @@ import pytest
 from psycopg import sql
 
 import tgsis
-from tests.merge_data import curved_surface, every_view, move, sqlstate, varied_history
+from tests.merge_data import MODEL1_COLUMNS, curved_surface, every_view, move, sqlstate, varied_history
 from tests.roles import login_roles
 from tgsis.db import features as F
 from tgsis.mesh import Surface
 
 Conn = psycopg.Connection[Any]
 
-MODEL1 = {
-    "vrtx": ("vrtxid", ["x", "y", "z"]),
-    "point": ("pointid", ["vrtxid1"]),
-    "segment": ("segid", ["vrtxid1", "vrtxid2"]),
-    "trgl": ("trglid", ["vrtxid1", "vrtxid2", "vrtxid3"]),
-    "tetra": ("tetraid", ["vrtxid1", "vrtxid2", "vrtxid3", "vrtxid4"]),
-}
+MODEL1 = MODEL1_COLUMNS
 VISIBLE = "(c.revision = ANY (tgsis.get_revisions(true))) IS TRUE AND NOT (c.lastrevs && tgsis.get_revisions(true))"
 
 

@@ -24,7 +24,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import tgsis
-from tests.merge_data import move
+from tests.merge_data import curved_surface, move
 from tests.test_sql_merge_regions import python_regions, sql_regions
 from tgsis.db import features as F
 from tgsis.merge3 import MeshState
@@ -37,19 +37,8 @@ CHUNKED = "SELECT tgsis.store_in_chunks(tablename) FROM tgsis.model_tables WHERE
 
 
 def grid_surface(side: int) -> tgsis.Surface:
-    """A side x side curved grid (full mantissas), a vertex and a cell property."""
-    u, v = np.meshgrid(np.linspace(0.0, 3.1, side), np.linspace(0.0, 2.7, side))
-    vertices = np.stack([u.ravel() * 1000.3, v.ravel() * 997.1, 150.0 * np.sin(u.ravel()) * np.cos(v.ravel())], axis=1)
-    idx = np.arange(side * side).reshape(side, side)
-    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel()
-    cells = np.concatenate([np.stack([a, b, d], 1), np.stack([a, d, c], 1)])
-    return tgsis.Surface(
-        vertices,
-        cells,
-        vertex_properties={"porosity": np.linspace(0.1, 0.3, side * side)},
-        cell_properties={"facies": np.arange(len(cells), dtype=np.int32) % 5},
-        name="fault",
-    )
+    """A side x side curved grid (full mantissas), a vertex and a cell property (tests/merge_data.py's)."""
+    return curved_surface(side)
 
 
 @pytest.fixture(scope="module")

@@ -15,7 +15,7 @@ import pytest
 from psycopg.conninfo import conninfo_to_dict, make_conninfo
 
 import tgsis
-from tests.merge_data import move
+from tests.merge_data import every_view, move
 from tgsis.db._chunk_transfer import ObjectRows, download_tables, upload_chunks
 from tgsis.errors import InvalidInputError
 from tgsis.mesh import Surface
@@ -141,17 +141,7 @@ def test_a_feature_without_versioning_is_written_through_the_face_from_default_o
 
 def _every_set_agrees(conn: Conn, geoids: list[int]) -> int:
     """Rows of tgsis.vrtx (today's view) against the decoded chunks under every version and revision, as bits."""
-    views: list[tuple[str, int | None]] = [
-        (r[0], None) for r in conn.execute("SELECT name FROM tgsis.versions ORDER BY versionid").fetchall()
-    ]
-    views += [
-        (r[0], int(r[1]))
-        for r in conn.execute(
-            "SELECT v.name, r.revision FROM tgsis.versions v JOIN tgsis.revisions r "
-            "ON r.visibleset IS NOT NULL AND (r.revision = ANY (v.workingset) OR r.versionid = v.versionid) "
-            "AND r.revision <> v.workingrevision ORDER BY 1, 2"
-        ).fetchall()
-    ]
+    views = every_view(conn)  # every working set and every revision a version can look at
     cols = "geoid, vrtxid, float8send(x), float8send(y), float8send(z)"
     for version, revision in views:
         if revision is None:

@@ -16,19 +16,13 @@ import pytest
 from psycopg import sql
 
 import tgsis
-from tests.merge_data import every_view, sqlstate, varied_history
+from tests.merge_data import MODEL1_COLUMNS, every_view, sqlstate, varied_history
 from tests.roles import login_roles
 from tgsis.testing import TestServer
 
 Conn = psycopg.Connection[Any]
 
-MODEL1 = {
-    "vrtx": ("vrtxid", ["x", "y", "z"]),
-    "point": ("pointid", ["vrtxid1"]),
-    "segment": ("segid", ["vrtxid1", "vrtxid2"]),
-    "trgl": ("trglid", ["vrtxid1", "vrtxid2", "vrtxid3"]),
-    "tetra": ("tetraid", ["vrtxid1", "vrtxid2", "vrtxid3", "vrtxid4"]),
-}
+MODEL1 = MODEL1_COLUMNS
 
 
 def _face_rows(conn: Conn, table: str) -> list[tuple[Any, ...]]:
