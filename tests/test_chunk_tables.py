@@ -667,7 +667,7 @@ def test_writer_under_a_transaction_snapshot_refuses_what_changed_after_it(
     _make_chunks(conn, ["vrtx"])
     assert _write(conn, "vrtx", _vertices([0, 1])) == 1
     conn.commit()
-    answers = []
+    answers: list[int | str | None] = []
     for other_ids, mine in (([1], [2]), ([5000], [5001])):
         conn.execute(f"SET TRANSACTION ISOLATION LEVEL {isolation}")
         conn.execute("SELECT count(*) FROM tgsis.vrtx_chunk").fetchone()  # the snapshot
