@@ -374,15 +374,16 @@ def test_an_editor_cannot_insert_a_chunk_its_readers_decode_differently(conn: Co
     ]
     with login_roles(db_dsn, {"ed": "tgsis_editor"}) as made:
         ed = made.connect("ed")
-        # a well-formed chunk goes in (the client's upload of a new object's chunks is this right)
-        assert (
-            _outcome(
-                ed,
-                "INSERT INTO tgsis.vrtx_chunk (geoid, chunk, revision, x, y, z) VALUES (%s, 4, %s, '{1}', '{2}', '{3}')",
-                (chunked, w[0]),
-            )
-            is None
-        )
+        # well-formed chunks go in (the client's upload of a new object's chunks is this right): plain, with a
+        # hole that holes lists, triangles relative to vbase
+        good = [
+            "INSERT INTO tgsis.vrtx_chunk (geoid, chunk, revision, x, y, z) VALUES (%s, 4, %s, '{1}', '{2}', '{3}')",
+            "INSERT INTO tgsis.vrtx_chunk (geoid, chunk, revision, holes, x, y, z) "
+            "VALUES (%s, 8, %s, '{2}', '{1,NULL,3}', '{1,NULL,3}', '{1,NULL,3}')",
+            "INSERT INTO tgsis.trgl_chunk (geoid, chunk, revision, vbase, vrtxid1, vrtxid2, vrtxid3) "
+            "VALUES (%s, 10, %s, 0, '{0}', '{1}', '{2}')",
+        ]
+        assert [_outcome(ed, statement, (chunked, w[0])) for statement in good] == [None] * len(good)
         answers = [_outcome(ed, statement, (chunked, w[0])) for statement in bad]
     # refused as a CHECK of the row table refuses a malformed row (tgsis.chunk_insert_check)
     assert answers == ["23514"] * len(bad), list(zip(bad, answers, strict=True))
