@@ -434,10 +434,11 @@ def test_a_feature_of_a_class_without_versioning_is_saved_in_revision_0_in_place
         assert z == (9.5,)
 
 
-def test_a_save_in_a_repeatable_read_session_is_refused_by_name_and_writes_nothing(conn: Conn, loaded: int) -> None:
-    """A session whose transactions are REPEATABLE READ: the chunk writer waits for concurrent writers and must see
-    what they committed, so the save is refused (TG300, naming the isolation level) rather than written from an
-    older snapshot; the row path refuses its deletes alike (tgsis.close_object_rows). Even an edit that only adds."""
+def test_a_save_in_a_repeatable_read_session_answers_as_on_rows(conn: Conn, loaded: int) -> None:
+    """A session whose transactions are REPEATABLE READ saves as on rows: an edit that changes stored rows closes
+    them there (tgsis.close_object_rows), which needs READ COMMITTED, so it is refused by name (TG300) and writes
+    nothing; an edit that only adds is written (the writer keeps the snapshot; a chunk changed after it would be
+    40001). Before: both refused on chunks."""
     base = _fetch(conn, loaded)
     grown = tgsis.Surface(
         np.concatenate([base.vertices, [[-5.0, -5.0, 1.0]]]),
@@ -445,15 +446,20 @@ def test_a_save_in_a_repeatable_read_session_is_refused_by_name_and_writes_nothi
         vertex_properties={"porosity": np.append(base.vertex_properties["porosity"], 0.25)},
         name="grid",
     )
+    moved = grown.copy()
+    moved.vertices[3, 2] += 1.0
     conn.execute("SET default_transaction_isolation = 'repeatable read'")
     conn.commit()
+    tgsis.save_feature(conn, "horizons", loaded, grown)
+    conn.commit()
+    assert _same(_fetch(conn, loaded), grown)
     with pytest.raises(tgsis.VersioningError, match="REPEATABLE READ") as refused:
-        tgsis.save_feature(conn, "horizons", loaded, grown)
+        tgsis.save_feature(conn, "horizons", loaded, moved)
     assert refused.value.sqlstate == "TG300"
     conn.rollback()
     conn.execute("SET default_transaction_isolation = 'read committed'")
     conn.commit()
-    assert _same(_fetch(conn, loaded), base)
-    tgsis.save_feature(conn, "horizons", loaded, grown)  # READ COMMITTED again: written
-    conn.commit()
     assert _same(_fetch(conn, loaded), grown)
+    tgsis.save_feature(conn, "horizons", loaded, moved)  # READ COMMITTED again: written
+    conn.commit()
+    assert _same(_fetch(conn, loaded), moved)

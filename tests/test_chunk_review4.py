@@ -349,13 +349,6 @@ class _Ran(Exception):
     pass
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="a direct INSERT into tgsis.<t>_chunk is checked for its revision and lastrevs only "
-    "(tgsis.storage_rows_check), not for its encoding: the conditions of tgsis.check_chunk_conversion "
-    "(arrays 1-based, of one length, NULL exactly at holes, vbase with relative refs) must be checked "
-    "on the statement's new chunk versions for roles other than the owners",
-)
 def test_an_editor_cannot_insert_a_chunk_its_readers_decode_differently(conn: Conn, chunked: int, db_dsn: str) -> None:
     """A direct INSERT into tgsis.vrtx_chunk (a right editors keep, for the client's COPY) of a malformed chunk.
 
@@ -381,17 +374,19 @@ def test_an_editor_cannot_insert_a_chunk_its_readers_decode_differently(conn: Co
     ]
     with login_roles(db_dsn, {"ed": "tgsis_editor"}) as made:
         ed = made.connect("ed")
-        # a well-formed chunk goes in (the client's upload of a new object's chunks is this right)
-        assert (
-            _outcome(
-                ed,
-                "INSERT INTO tgsis.vrtx_chunk (geoid, chunk, revision, x, y, z) VALUES (%s, 4, %s, '{1}', '{2}', '{3}')",
-                (chunked, w[0]),
-            )
-            is None
-        )
-        accepted = [statement for statement in bad if _outcome(ed, statement, (chunked, w[0])) is None]
-    assert not accepted, accepted
+        # well-formed chunks go in (the client's upload of a new object's chunks is this right): plain, with a
+        # hole that holes lists, triangles relative to vbase
+        good = [
+            "INSERT INTO tgsis.vrtx_chunk (geoid, chunk, revision, x, y, z) VALUES (%s, 4, %s, '{1}', '{2}', '{3}')",
+            "INSERT INTO tgsis.vrtx_chunk (geoid, chunk, revision, holes, x, y, z) "
+            "VALUES (%s, 8, %s, '{2}', '{1,NULL,3}', '{1,NULL,3}', '{1,NULL,3}')",
+            "INSERT INTO tgsis.trgl_chunk (geoid, chunk, revision, vbase, vrtxid1, vrtxid2, vrtxid3) "
+            "VALUES (%s, 10, %s, 0, '{0}', '{1}', '{2}')",
+        ]
+        assert [_outcome(ed, statement, (chunked, w[0])) for statement in good] == [None] * len(good)
+        answers = [_outcome(ed, statement, (chunked, w[0])) for statement in bad]
+    # refused as a CHECK of the row table refuses a malformed row (tgsis.chunk_insert_check)
+    assert answers == ["23514"] * len(bad), list(zip(bad, answers, strict=True))
 
 
 @pytest.mark.parametrize("storage", ["rows", "chunks"])
@@ -699,14 +694,6 @@ def test_roles_cannot_reach_the_chunk_storage_around_the_checks(conn: Conn, chun
     assert after == before
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="unversioned chunk storage takes a role's direct INSERT of any revision and lastrevs: the face "
-    "hides it, fetch_feature then refuses the object (InvalidInputError: a chunk twice) and "
-    "enable_feature_versioning can make it visible; a direct INSERT into an unversioned chunk table "
-    "must be refused unless revision = 0 and lastrevs = '{}' and no version of the chunk is stored "
-    "(a statement trigger like tgsis.storage_rows_check, kept while the table is not versioned)",
-)
 def test_an_editor_cannot_add_a_second_version_of_a_chunk_in_unversioned_storage(conn: Conn, db_dsn: str) -> None:
     """Unversioned storage has one chunk version per chunk, revision 0 and open; a direct INSERT of another one.
 
@@ -730,6 +717,15 @@ def test_an_editor_cannot_add_a_second_version_of_a_chunk_in_unversioned_storage
             )
             if _outcome(ed, statement, (geoid,)) is None
         ]
+        # an open chunk version of revision 0 of a new chunk is what unversioned storage holds: it goes in
+        assert (
+            _outcome(
+                ed,
+                "INSERT INTO tgsis.vrtx_chunk (geoid, chunk, revision, x, y, z) VALUES (%s, 9, 0, '{1}', '{2}', '{3}')",
+                (geoid,),
+            )
+            is None
+        )
         # what they leave behind, committed: the readers and a later enable_feature_versioning
         for statement in ran:
             ed.execute(statement, (geoid,))
@@ -947,14 +943,6 @@ def test_saves_of_one_chunk_in_two_versions_at_once_keep_both(
     assert results[1][1:] == [("v1", expected_child.tobytes(), (0,)), ("DEFAULT", expected_parent.tobytes(), (0,))]
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="a write through the face on chunks is refused (TG300, tgsis.require_read_committed in "
-    "tgsis.write_chunk_rows) in a REPEATABLE READ or SERIALIZABLE transaction, where the row view "
-    "writes: a psql or ORM session whose default isolation is not READ COMMITTED loses face writes with "
-    "the switch (undocumented). Fix: let the face write under a transaction snapshot (a changed slot is "
-    "40001 there, as PostgreSQL's own tables answer), or document the refusal in docs/storage.md",
-)
 @pytest.mark.parametrize("isolation", ["repeatable read", "serializable"])
 def test_a_save_under_another_isolation_level_answers_as_on_rows(
     conn: Conn, make_database: Callable[..., str], template_db: str, isolation: str
@@ -998,6 +986,83 @@ def test_a_save_under_another_isolation_level_answers_as_on_rows(
             results.append(answers)
     assert results[0] == results[1]
     assert results[1][2] == ("face", 1)  # the row view writes (the oracle is chunked too under TGSIS_TEST_STORAGE)
+
+
+@pytest.mark.parametrize("isolation", ["repeatable read", "serializable"])
+@pytest.mark.parametrize("storage", ["rows", "chunks"])
+def test_face_writes_under_a_transaction_snapshot_lose_no_update(
+    conn: Conn, db_dsn: str, storage: str, isolation: str
+) -> None:
+    """Two sessions at REPEATABLE READ or SERIALIZABLE add to vertices through the face: no update is lost.
+
+    A write over a row another transaction changed after this one's snapshot is 40001 on both
+    storages (PostgreSQL's answer on a table; on chunks tgsis.write_chunk_rows' lock or insert),
+    whether that transaction committed before the write or was waited for. On chunks the unit
+    is the chunk: another vertex of the changed chunk is 40001 too, where rows write it; and in
+    SERIALIZABLE the object (a face write reads the object's chunks: a predicate on all of them),
+    another chunk of it too (docs/storage.md, "What differs from rows").
+    """
+    F.create_feature_class(conn, "horizons", "SURFACE", cell_properties={"porosity": "float8"})
+    tgsis.enable_feature_versioning(conn)
+    geoid = F.insert_feature(conn, "horizons", _grid(33, 14, "grid"))
+    conn.commit()
+    if storage == "chunks":
+        _switch(conn)
+    chunks = conn.execute("SELECT tgsis.stored_in_chunks('vrtx')").fetchone() == (True,)
+    read = "SELECT vrtxid, z FROM tgsis.vrtx WHERE geoid = %s AND vrtxid IN (7, 8, 1050) ORDER BY 1"
+    before = dict(conn.execute(read, (geoid,)).fetchall())
+    conn.commit()
+    add = "UPDATE tgsis.vrtx SET z = z + %s WHERE geoid = %s AND vrtxid = %s"
+    a, b = psycopg.connect(db_dsn), psycopg.connect(db_dsn)
+    watch = psycopg.connect(db_dsn, autocommit=True)
+    answers: list[Any] = []
+
+    def write(session: Conn, amount: float, vertex: int) -> None:
+        try:
+            answers.append((vertex, session.execute(add, (amount, geoid, vertex)).rowcount))
+            session.commit()
+        except psycopg.Error as exc:
+            session.rollback()
+            answers.append((vertex, exc.sqlstate))
+
+    try:
+        for session in (a, b):
+            session.execute(f"SET default_transaction_isolation = '{isolation}'")
+            session.commit()
+        # 1. b commits after a's snapshot: a writes the same vertex, another of its chunk, one of another chunk
+        for vertex in (7, 8, 1050):
+            a.execute(read, (geoid,))
+            write(b, 1.0, 7)
+            write(a, 10.0, vertex)
+        # 2. b's snapshot is older than a's write, which b waits for
+        b.execute(read, (geoid,))
+        a.execute(add, (100.0, geoid, 7))
+        thread = threading.Thread(target=write, args=(b, 1000.0, 7))
+        thread.start()
+        _blocked_or_done(watch, b.info.backend_pid, thread)
+        a.commit()
+        thread.join(60)
+        assert not thread.is_alive()
+        after = dict(conn.execute(read, (geoid,)).fetchall())
+        conn.commit()
+    finally:
+        a.close()
+        b.close()
+        watch.close()
+    assert answers == [
+        (7, 1),
+        (7, "40001"),
+        (7, 1),
+        (8, "40001" if chunks else 1),
+        (7, 1),
+        (1050, "40001" if chunks and isolation == "serializable" else 1),
+        (7, "40001"),
+    ]
+    assert after == {
+        7: before[7] + 3.0 + 100.0,
+        8: before[8] + (0.0 if chunks else 10.0),
+        1050: before[1050] + (0.0 if chunks and isolation == "serializable" else 10.0),
+    }
 
 
 def test_a_role_without_the_class_reads_as_much_as_on_rows(

@@ -35,8 +35,7 @@ DECLARE
     v_rextra   text := '';  -- unversioned: the revision and lastrevs a chunk version must have, against its own
     v_cextra   text := '';
     v_bad      record;
-    v_enc      text[];  -- the encoding's conditions on a chunk version c
-    v_len      text;    -- its length: the first value array's
+    v_enc      text[];  -- the encoding's conditions on a chunk version c (tgsis.chunk_encoding_checks)
 BEGIN
     SELECT * INTO v_reg FROM tgsis.model_tables t WHERE t.tablename = p_table;
     PERFORM tgsis.chunk_table_of(p_table, true);  -- TG200 / TG100
@@ -48,24 +47,8 @@ BEGIN
                                       ELSE format('r.%I', c.name) END, ', ' ORDER BY c.colorder)
                  FROM tgsis.chunk_columns(p_table) c);
     v_versioned := EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table);
-    -- the encoding of every chunk version
-    v_len := (SELECT CASE WHEN c.role = 'float' THEN format('cardinality(c.%I)', c.name)
-                          ELSE format('cardinality(coalesce(c.%I, c.%I))', c.name, c.name || '_wide') END
-                FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref') ORDER BY c.colorder LIMIT 1);
-    v_enc := ARRAY[format('%s BETWEEN 1 AND %s', v_len, v_reg.chunksize),
-                   format('(c.holes IS NULL OR (cardinality(c.holes) > 0 AND NOT (%s = ANY (c.holes))))', v_len)]
-          || ARRAY(SELECT format('(c.%1$I IS NULL OR (array_ndims(c.%1$I) = 1 AND array_lower(c.%1$I, 1) = 1 '
-                                 'AND cardinality(c.%1$I) = %2$s AND ARRAY(SELECT u.o::smallint FROM unnest(c.%1$I) '
-                                 'WITH ORDINALITY AS u(v, o) WHERE u.v IS NULL ORDER BY u.o) = coalesce(c.holes, ''{}'')))',
-                                 a.col, v_len)
-                     FROM (SELECT c.name AS col, c.colorder, 0 AS w FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref')
-                           UNION ALL
-                           SELECT c.name || '_wide', c.colorder, 1 FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref') a
-                    ORDER BY a.w, a.colorder)
-          || ARRAY(SELECT format('c.%I IS NOT NULL', c.name) FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'float')
-          || ARRAY(SELECT format('(c.vbase IS NOT NULL) = (c.%1$I IS NOT NULL) AND (c.vbase IS NULL) = (c.%2$I IS NOT NULL)',
-                                 c.name, c.name || '_wide')
-                     FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref');
+    -- the encoding of every chunk version (the conditions a direct insert is checked for too)
+    v_enc := tgsis.chunk_encoding_checks(p_table);
     EXECUTE format('SELECT concat_ws(%1$L, %2$s) AS object, c.chunk, c.revision, count(*) OVER () AS n FROM tgsis.%3$I c '
                    'WHERE NOT coalesce(%4$s, false) ORDER BY 1, 2, 3 LIMIT 1',
                    ', ', (SELECT string_agg(format('%L || c.%I', k || ' ', k), ', ') FROM unnest(v_keys) AS k),

@@ -17,7 +17,9 @@
 --   * no lost update (docs/versioning.md): a face writer takes the chunk's
 --     transaction lock (an advisory lock per table, object, chunk and version,
 --     exclusive, in key order), then reads the chunk's visible version with a
---     new snapshot (READ COMMITTED: what a writer it waited for committed)
+--     new snapshot (READ COMMITTED: what a writer it waited for committed;
+--     REPEATABLE READ and SERIALIZABLE keep the transaction's, and a chunk
+--     changed after it is 40001 from tgsis.write_chunk_rows' lock or insert)
 --     and compares the slot it writes with the row the statement read
 --     (binary equality, *=): changed meanwhile is 40001, changed by this
 --     transaction since the statement read it is 27000 (deleted by it, too: a

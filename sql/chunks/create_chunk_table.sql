@@ -14,6 +14,8 @@
 -- names <table>_ver and so is not reused). Grants and row-level security are
 -- the row table's storage's (tgsis.grant_model_tables, tgsis.protect_model_tables),
 -- copied from the catalog: the same roles reach the same objects' chunks.
+-- A statement trigger checks what roles other than the owners insert
+-- directly (tgsis.chunk_insert_check: the encoding, unversioned revisions).
 -- Nothing reads or writes chunk tables yet besides tgsis.write_chunk_rows and
 -- the decoded face (tgsis.create_chunk_view); the storage switch comes next.
 -- Not idempotent: a second call refuses by name (TG201). Runs with the
@@ -142,6 +144,17 @@ BEGIN
                        CASE WHEN v_pol.withcheck IS NOT NULL THEN format(' WITH CHECK (%s)', v_pol.withcheck) ELSE '' END);
         EXECUTE format('COMMENT ON POLICY %I ON %s IS %L', v_pol.polname, v_chunk, obj_description(v_pol.oid, 'pg_policy'));
     END LOOP;
+    -- what the roles that keep INSERT (the client's COPY upload) write is checked (tgsis.chunk_insert_check);
+    -- the owners are spared, by role name as tgsis.guard_chunk_storage's triggers (a restored dump keeps names)
+    EXECUTE format('CREATE TRIGGER tgsis_chunk_insert AFTER INSERT ON %s REFERENCING NEW TABLE AS tgsis_new_chunks '
+                   'FOR EACH STATEMENT WHEN (NOT pg_catalog.pg_has_role(current_user, %L::name, ''USAGE'') '
+                   'AND NOT pg_catalog.pg_has_role(current_user, %L::name, ''USAGE'')) '
+                   'EXECUTE FUNCTION tgsis.chunk_insert_check(%L)',
+                   v_chunk, (SELECT pg_get_userbyid(c.relowner) FROM pg_class c WHERE c.oid = v_chunk),
+                   (SELECT pg_get_userbyid(n.nspowner) FROM pg_namespace n WHERE n.nspname = 'tgsis'), p_table);
+    EXECUTE format('COMMENT ON TRIGGER tgsis_chunk_insert ON %s IS %L', v_chunk,
+                   'chunk versions inserted directly by roles other than the owners are encoded as read, and open of revision 0 '
+                   'while unversioned (tgsis.chunk_insert_check)');
     RETURN v_chunk;
 END
 $$;
@@ -149,4 +162,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.create_chunk_table(text) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.create_chunk_table(text) IS
-    'create tgsis.<table>_chunk, the chunk storage of a model table registered for chunks (tgsis.model_tables.chunkcolumn), per the contract of docs/storage.md: columns from the live storage, lz4 or pglz compression, primary key and revision indexes, comments, the storage''s grants and row-level security; TG200 for a table not registered for chunks, TG201 when it exists';
+    'create tgsis.<table>_chunk, the chunk storage of a model table registered for chunks (tgsis.model_tables.chunkcolumn), per the contract of docs/storage.md: columns from the live storage, lz4 or pglz compression, primary key and revision indexes, comments, the storage''s grants and row-level security, the check of direct inserts (tgsis.chunk_insert_check); TG200 for a table not registered for chunks, TG201 when it exists';

@@ -17,7 +17,8 @@
 --   revisions W' of E (W' <> W) whose set holds W: every set then sees one
 --   chunk version per chunk, the one of its largest event revision, holding
 --   exactly the rows it saw.
--- Then tgsis.check_chunk_conversion proves it for every working set and every
+-- Then the chunk table is analyzed (its statistics plan the proof and the
+-- reads after the switch) and tgsis.check_chunk_conversion proves it for every working set and every
 -- revision's set (TG000 otherwise: the caller's transaction changes nothing).
 -- The row storage is locked against writes (SHARE), and the version rows
 -- (FOR SHARE: no new revision, merge or compress meanwhile). Refused: a chunk
@@ -172,6 +173,8 @@ $q$;
     END LOOP;
     EXECUTE v_sql;
     GET DIAGNOSTICS v_n = ROW_COUNT;
+    -- statistics of the new chunks: the proof's queries and, after the switch, every read are planned from them
+    EXECUTE format('ANALYZE %s', v_chunk);
     PERFORM tgsis.check_chunk_conversion(p_table);
     RETURN v_n;
 END

@@ -26,6 +26,16 @@
 --    stays the same bit for bit is not written at all. A new chunk that a
 --    concurrent writer inserted meanwhile (its insert waited for it) is done
 --    again by step 1 for those chunks only, reading what it committed.
+-- Any isolation level: in READ COMMITTED each statement sees what the writers
+-- it waited for committed (the locks of step 2, the retry of step 3); in
+-- REPEATABLE READ and SERIALIZABLE (a session's default isolation: psql, an
+-- ORM) the transaction's snapshot stays, and a chunk version another
+-- transaction changed or closed after it fails the lock of step 2, a chunk
+-- it inserted the insert of step 3, with 40001 as PostgreSQL's own tables
+-- answer (could not serialize access due to concurrent update): never a
+-- write over what the snapshot missed. The unit of the conflict is the chunk:
+-- two such transactions writing different ids of one chunk conflict
+-- (docs/storage.md, "What differs from rows").
 -- Refused by name: a p_rows that is not a temporary table of the session (it is read
 -- by several statements: another session could change it in between), or
 -- without the row table's columns (of its types) or _delete, a
@@ -74,7 +84,6 @@ DECLARE
     v_round    integer := 0;
     v_sql      text;
 BEGIN
-    PERFORM tgsis.require_read_committed('a write of chunks');
     SELECT * INTO v_reg FROM tgsis.model_tables t WHERE t.tablename = p_table;
     v_chunk := tgsis.chunk_table_of(p_table);  -- TG200 / TG100
     v_storage := tgsis.row_shape(p_table);  -- the row definition (CHECK constraints), before or after the switch

@@ -19,7 +19,9 @@
 -- TG301 while an older revision is viewed, TG305 for unversioned storage
 -- outside DEFAULT's working revision, revision 0 for features of classes
 -- without versioning (all three in tgsis.write_chunk_rows), the object not
--- locked by another version (TG303). The object's write lock is taken
+-- locked by another version (TG303), and READ COMMITTED when rows of a
+-- versioned table go or change (TG300, as tgsis.close_object_rows asks on rows;
+-- an edit that only adds is written at any isolation level, as on rows). The object's write lock is taken
 -- exclusively (tgsis.object_write_lock: no write through the face is in
 -- flight on it), and the object is noted as changed in the working revision
 -- when a chunk was written (tgsis.record_changed_objects; never for revision
@@ -113,6 +115,18 @@ BEGIN
     END IF;
     PERFORM tgsis.check_class_write(ARRAY[p_geoid], 'UPDATE');
     IF EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table) THEN
+        -- rows that go or change are closed on rows (tgsis.close_object_rows), which needs READ COMMITTED: the
+        -- same refusal here (TG300), an edit that only adds is written at any level as on rows (read only then)
+        IF current_setting('transaction_isolation') <> 'read committed' THEN
+            IF v_d = 0 AND v_n > 0 THEN
+                EXECUTE format('SELECT (array_agg(f.%2$I))[1] FROM %1$s f WHERE f.%3$I = $1 AND f.%2$I = ANY ($2)',
+                               v_face, v_reg.chunkcolumn, v_reg.keycolumn)
+                   INTO v_stored USING p_geoid, p_ids;
+            END IF;
+            IF v_d > 0 OR v_stored IS NOT NULL THEN
+                PERFORM tgsis.require_read_committed('a set-based delete of versioned objects');
+            END IF;
+        END IF;
         PERFORM tgsis.write_revision();  -- TG002, TG301 before any lock is taken
         PERFORM tgsis.check_objects_unlocked(v_reg.objectclass, v_keys);
     ELSE

@@ -68,6 +68,8 @@ BEGIN
             EXECUTE format('CREATE TRIGGER tgsis_versioning_rights BEFORE INSERT OR UPDATE OR DELETE ON tgsis.%I '
                            'FOR EACH STATEMENT EXECUTE FUNCTION tgsis.view_write_check()', v_table);
             PERFORM tgsis.guard_chunk_storage(v_table);  -- its rights and triggers as versioned storage
+            -- statistics, as tgsis.enable_versioning_rel gives <table>_ver: the reads of versions are planned from them
+            EXECUTE format('ANALYZE tgsis.%I', v_table || '_chunk');
         ELSE
             PERFORM tgsis.enable_versioning_rel(format('tgsis.%I', v_table)::regclass, v_key, v_objectclass, v_order);
         END IF;

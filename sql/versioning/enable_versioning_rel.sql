@@ -218,6 +218,9 @@ BEGIN
     END IF;
     -- the rows written or closed in given revisions, found by index (merges, refreshes, merges by region)
     PERFORM tgsis.create_revision_indexes(v_schema, v_table, p_objectkeyfield);
+    -- statistics for the rewritten table (the new columns have none; a fresh table none at all): the view's
+    -- reads are planned from them at once, not after autovacuum's first pass (ewkb_geometry measured 57 s -> 0.19 s)
+    EXECUTE format('ANALYZE %I.%I', v_schema, v_ver);  -- (the caller owns it: checked above)
     EXECUTE format('COMMENT ON TABLE %I.%I IS %L', v_schema, v_ver,
                    format('row versions of %s.%s (tgsis versioning): read and write it through the view %s.%s',
                           v_schema, v_table, v_schema, v_table));

@@ -1,0 +1,55 @@
+-- tgsis.chunk_encoding_checks(table): the conditions a chunk version c of tgsis.<table>_chunk meets when encoded as its readers read it.
+-- One list for both places that check an encoding they did not write
+-- themselves: the conversion's proof (tgsis.check_chunk_conversion, before a
+-- storage switch returns) and the check of chunk versions a role other than
+-- the owners inserts directly (tgsis.chunk_insert_check: the client's COPY
+-- upload, or a hand-written INSERT). A chunk breaking one is read differently
+-- by the readers (the decoded view by ordinality, tgsis.vertex by subscript,
+-- the Python codec by holes): row storage cannot hold such a row (NOT NULL,
+-- CHECKs), so the chunk storage must not either. The conditions (docs/storage.md,
+-- "Chunks and the mapping of ids"): the arrays are one-dimensional, numbered
+-- from 1, all of one length between 1 and the chunk size, NULL exactly at the
+-- slots holes lists (ascending, not the last slot; holes NULL when none),
+-- the double precision arrays present, and for vertex-id columns either vbase
+-- with the relative integer arrays or the absolute _wide arrays, never both
+-- nor neither. Returned as SQL boolean expressions over the alias c, built
+-- from the registry (tgsis.chunk_columns); the caller ANDs them (NULL counts
+-- as false). Internal: runs with the caller's rights.
+CREATE FUNCTION tgsis.chunk_encoding_checks(p_table text)
+RETURNS text[]
+LANGUAGE plpgsql
+STABLE
+SET search_path = pg_catalog, pg_temp
+AS $$
+DECLARE
+    v_size integer;
+    v_len  text;  -- the chunk version's length: its first value array's
+BEGIN
+    v_size := (SELECT t.chunksize FROM tgsis.model_tables t WHERE t.tablename = p_table);
+    v_len := (SELECT CASE WHEN c.role = 'float' THEN format('cardinality(c.%I)', c.name)
+                          ELSE format('cardinality(coalesce(c.%I, c.%I))', c.name, c.name || '_wide') END
+                FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref') ORDER BY c.colorder LIMIT 1);
+    RETURN ARRAY[format('%s BETWEEN 1 AND %s', v_len, v_size),
+                 format('(c.holes IS NULL OR (cardinality(c.holes) > 0 AND NOT (%s = ANY (c.holes))))', v_len)]
+        -- (array_positions finds the NULLs in C: the check runs on every upload; the CASE keeps it from
+        -- multidimensional arrays, which it refuses with an error of its own)
+        || ARRAY(SELECT format('(c.%1$I IS NULL OR CASE WHEN array_ndims(c.%1$I) = 1 AND array_lower(c.%1$I, 1) = 1 '
+                               'AND cardinality(c.%1$I) = %2$s THEN array_positions(c.%1$I, NULL) = '
+                               'coalesce(c.holes::integer[], ''{}'') ELSE false END)',
+                               a.col, v_len)
+                   FROM (SELECT c.name AS col, c.colorder, 0 AS w FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref')
+                         UNION ALL
+                         SELECT c.name || '_wide', c.colorder, 1 FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref') a
+                  ORDER BY a.w, a.colorder)
+        || ARRAY(SELECT format('c.%I IS NOT NULL', c.name) FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'float'
+                  ORDER BY c.colorder)
+        || ARRAY(SELECT format('(c.vbase IS NOT NULL) = (c.%1$I IS NOT NULL) AND (c.vbase IS NULL) = (c.%2$I IS NOT NULL)',
+                               c.name, c.name || '_wide')
+                   FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder);
+END
+$$;
+
+REVOKE ALL ON FUNCTION tgsis.chunk_encoding_checks(text) FROM PUBLIC;
+
+COMMENT ON FUNCTION tgsis.chunk_encoding_checks(text) IS
+    'the conditions (SQL boolean expressions over the alias c) a chunk version of tgsis.<table>_chunk meets when encoded as its readers read it: arrays one-dimensional from 1, of one length between 1 and the chunk size, NULL exactly at holes, doubles present, refs either relative with vbase or absolute in _wide; shared by tgsis.check_chunk_conversion and tgsis.chunk_insert_check';
