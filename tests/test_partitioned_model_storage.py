@@ -96,7 +96,7 @@ def test_the_storage_is_partitioned_and_versioning_keeps_it_so(
     tgsis.enable_feature_versioning(conn)
     for table in ("vrtx", "trgl"):
         storage = _storage(conn, table)  # <table>_ver on rows, <table>_chunk on chunks
-        assert _partitions(conn, storage) == [f"{storage}_p{r}" for r in range(PARTITIONS)], table
+        assert len(_partitions(conn, storage)) == PARTITIONS, table
         used = conn.execute(sql.SQL("SELECT count(DISTINCT tableoid) FROM {}").format(sql.SQL(storage))).fetchone()
         assert used is not None and used[0] > 1, table  # twelve geometries spread over the partitions
     assert all(geometry_of(tgsis.fetch_feature(conn, horizons, i)).same_as(_grid(6)) for i in ids)
@@ -121,7 +121,7 @@ def test_an_editor_checks_in_and_a_merge_brings_it_home(db_dsn: str, conn: Conn,
         editor.commit()
         assert geometry_of(tgsis.fetch_feature(editor, horizons.name, geoid)).same_as(edited)
         # a partition by name is not the editor's to write: the parent's rights are
-        part = _storage(editor, "vrtx") + "_p0"
+        part = _partitions(editor, _storage(editor, "vrtx"))[0]
         editor.rollback()
         with pytest.raises(psycopg.errors.InsufficientPrivilege):
             editor.execute(sql.SQL("INSERT INTO {} (geoid) VALUES (1)").format(sql.SQL(part)))
@@ -157,7 +157,7 @@ def test_dump_and_restore_keep_the_partitioned_model_storage(
     with _restored(pg, _bindir_of(pg), db_dsn, "custom", tmp_path) as dsn, psycopg.connect(dsn) as restored:
         for table in ("vrtx", "trgl"):
             storage = _storage(restored, table)
-            assert _partitions(restored, storage) == [f"{storage}_p{r}" for r in range(PARTITIONS)], table
+            assert len(_partitions(restored, storage)) == PARTITIONS, table
         assert geometry_of(tgsis.fetch_feature(restored, horizons.name, geoid)).same_as(mesh)
         with tgsis.in_version(restored, "edit"):
             assert geometry_of(tgsis.fetch_feature(restored, horizons.name, geoid)).same_as(edited)

@@ -10,20 +10,20 @@
 -- ids, so its chunk versions are copied (and verified: the new table holds
 -- exactly the old one's rows, every column compared by its send form, so every
 -- version and revision sees the same chunks, bit for bit; TG000 and nothing
--- changed otherwise). What depends on the chunk table is made again: the
--- face tgsis.<table> (tgsis.create_chunk_face: the grants of the face it
--- replaces, its comment, its INSTEAD OF triggers), the decoded
--- tgsis.<table>_chunk_rows (and its grants), the chunk table's owner, grants,
--- row-level security and policies (copied from the old one), and the guards
--- of versioned storage (tgsis.guard_chunk_storage). Refused (TG202, nothing
--- changed): a chunk table partitioned already, a face, chunk view or chunk
--- table used by other objects (views, functions, foreign keys, triggers of
--- the users: they would be lost), the temporary name tgsis.<table>_face
--- taken. p_check_only: lock and check only (tgsis.partition_model_storage
--- checks every table of a model before changing any). The caller checks the
--- number of partitions and the lock estimate. Internal: tgsis's owner, who
--- owns the storage; in the caller's transaction. Returns the chunk versions
--- moved.
+-- changed otherwise). The face tgsis.<table> and the decoded
+-- tgsis.<table>_chunk_rows stay the same views (CREATE OR REPLACE VIEW with
+-- their own definitions, now read from the new table: their oids, grants,
+-- comments, triggers, the users' views over them and the sessions' work tables
+-- of the face's writer, typed by the face's row, are kept); the chunk table
+-- gets the old one's owner, grants, row-level security and policies, and the
+-- guards of versioned storage again (tgsis.guard_chunk_storage). Refused
+-- (TG202, nothing changed): a chunk table partitioned already, or one other
+-- objects use directly (views, functions, foreign keys, the users' triggers,
+-- which would be lost), the temporary name taken. p_check_only: lock and
+-- check only (tgsis.partition_model_storage checks every table of a model
+-- before changing any). The caller checks the lock estimate. Internal:
+-- tgsis's owner, who owns the storage; in the caller's transaction. Returns
+-- the chunk versions moved.
 CREATE FUNCTION tgsis.partition_chunk_storage(p_table text, p_partitions integer, p_check_only boolean DEFAULT false)
 RETURNS bigint
 LANGUAGE plpgsql
@@ -40,8 +40,8 @@ DECLARE
     v_users     text;
     v_owner     name;
     v_comment   text;
-    v_facenote  text;
-    v_viewacl   aclitem[];
+    v_facedef   text;
+    v_viewdef   text;
     v_names     text[];
     v_defs      text[];
     v_index     record;
@@ -75,37 +75,36 @@ BEGIN
                                   CASE v_kind WHEN 'p' THEN 'partitioned already' ELSE 'no table' END),
                   HINT = 'partition the model tables once';
     END IF;
-    -- what refers to the face, the chunk view or the chunk table, besides each other, would be lost or block the swap
+    -- what refers to the chunk table, besides the face and the chunk view (made again over the new one), would
+    -- block the swap or be lost
     SELECT string_agg(DISTINCT u, ', ') INTO v_users FROM (
         SELECT CASE WHEN d.classid = 'pg_rewrite'::regclass
                     THEN (SELECT 'view ' || r.ev_class::regclass::text FROM pg_rewrite r WHERE r.oid = d.objid)
                     ELSE pg_describe_object(d.classid, d.objid, 0) END AS u
           FROM pg_depend d
-         WHERE d.refclassid = 'pg_class'::regclass AND d.refobjid IN (v_chunk, v_face, v_view) AND d.deptype = 'n'
-           AND NOT (d.classid = 'pg_rewrite'::regclass          -- the face and the chunk view read the chunk table
+         WHERE d.refclassid = 'pg_class'::regclass AND d.refobjid = v_chunk AND d.deptype = 'n'
+           AND NOT (d.classid = 'pg_rewrite'::regclass
                     AND EXISTS (SELECT FROM pg_rewrite r WHERE r.oid = d.objid AND r.ev_class IN (v_face, v_view)))
            AND NOT (d.classid = 'pg_constraint'::regclass
                     AND EXISTS (SELECT FROM pg_constraint c WHERE c.oid = d.objid AND c.conrelid = v_chunk))
            AND NOT (d.classid = 'pg_policy'::regclass
                     AND EXISTS (SELECT FROM pg_policy p WHERE p.oid = d.objid AND p.polrelid = v_chunk))
-           AND NOT (d.classid = 'pg_trigger'::regclass)         -- triggers: below, by name
-           AND d.classid <> 'pg_attrdef'::regclass
+           AND d.classid NOT IN ('pg_trigger'::regclass, 'pg_attrdef'::regclass)
         UNION ALL
-        -- triggers other than tgsis's own (the face's writers, the write right's check, the guards)
+        -- triggers other than the guards of versioned storage (made again)
         SELECT format('trigger %s on %s', t.tgname, t.tgrelid::regclass)
           FROM pg_trigger t
-         WHERE NOT t.tgisinternal AND t.tgrelid IN (v_chunk, v_face, v_view)
-           AND t.tgname NOT IN ('tgsis_chunk_face', 'tgsis_chunk_face_flush', 'tgsis_versioning_rights',
-                                'tgsis_storage_write', 'tgsis_storage_rows', 'tgsis_storage_changes')
+         WHERE NOT t.tgisinternal AND t.tgrelid = v_chunk
+           AND t.tgname NOT IN ('tgsis_storage_write', 'tgsis_storage_rows', 'tgsis_storage_changes')
     ) AS s(u);
     IF v_users IS NOT NULL THEN
         RAISE EXCEPTION 'tgsis.% is used by other objects', quote_ident(p_table)
             USING ERRCODE = 'TG202', DETAIL = 'used by: ' || v_users,
                   HINT = 'drop them, partition the model tables, then create them again';
     END IF;
-    IF to_regclass(format('tgsis.%I', p_table || '_face')) IS NOT NULL OR to_regclass(format('tgsis.%I', v_old)) IS NOT NULL THEN
-        RAISE EXCEPTION 'tgsis.% or tgsis.% exists already', quote_ident(p_table || '_face'), quote_ident(v_old)
-            USING ERRCODE = 'TG202', DETAIL = 'Partitioning a chunk table needs these names for the new face and the old chunk table.',
+    IF to_regclass(format('tgsis.%I', v_old)) IS NOT NULL THEN
+        RAISE EXCEPTION 'tgsis.% exists already', quote_ident(v_old)
+            USING ERRCODE = 'TG202', DETAIL = 'Partitioning a chunk table needs this name for the old chunk table.',
                   HINT = 'drop or rename them, then partition the model tables';
     END IF;
     IF p_check_only THEN
@@ -114,8 +113,13 @@ BEGIN
 
     -- what the new objects take from the old ones
     SELECT c.relowner::regrole::name, obj_description(c.oid, 'pg_class') INTO v_owner, v_comment FROM pg_class c WHERE c.oid = v_chunk;
-    v_facenote := obj_description(v_face, 'pg_class');
-    SELECT c.relacl INTO v_viewacl FROM pg_class c WHERE c.oid = v_view;
+    -- (read while they name the old table tgsis.<table>_chunk: the same text names the new one)
+    SELECT format('CREATE OR REPLACE VIEW %s%s AS %s', v_face, coalesce(' WITH (' || array_to_string(c.reloptions, ', ') || ')', ''),
+                  rtrim(pg_get_viewdef(c.oid), '; ' || chr(10)))
+      INTO v_facedef FROM pg_class c WHERE c.oid = v_face;
+    SELECT format('CREATE OR REPLACE VIEW %s%s AS %s', v_view, coalesce(' WITH (' || array_to_string(c.reloptions, ', ') || ')', ''),
+                  rtrim(pg_get_viewdef(c.oid), '; ' || chr(10)))
+      INTO v_viewdef FROM pg_class c WHERE c.oid = v_view;
     SELECT array_agg(c.relname::text ORDER BY c.relname), array_agg(split_part(pg_get_indexdef(i.indexrelid), ' USING ', 2) ORDER BY c.relname)
       INTO v_names, v_defs
       FROM pg_index i JOIN pg_class c ON c.oid = i.indexrelid WHERE i.indrelid = v_chunk;
@@ -178,11 +182,9 @@ BEGIN
             USING ERRCODE = 'TG000', DETAIL = 'Nothing was changed.';
     END IF;
 
-    -- the face (the grants of the face it replaces, read while it exists) and the chunk view, made again over it
-    PERFORM tgsis.create_chunk_face(p_table, p_table || '_face');
-    EXECUTE format('COMMENT ON VIEW tgsis.%I IS %L', p_table || '_face', v_facenote);
-    EXECUTE format('DROP VIEW %s', v_face);
-    EXECUTE format('DROP VIEW %s', v_view);
+    -- the face and the chunk view read the new table; the old one goes and its index names are taken
+    EXECUTE v_facedef;
+    EXECUTE v_viewdef;
     EXECUTE format('DROP TABLE %s', v_chunk);
     FOR v_index IN SELECT i.indexrelid::regclass AS idx, c.relname::text AS name,
                           v_names[array_position(v_defs, split_part(pg_get_indexdef(i.indexrelid), ' USING ', 2))] AS old
@@ -190,13 +192,6 @@ BEGIN
         IF v_index.old IS NOT NULL AND v_index.old <> v_index.name THEN
             EXECUTE format('ALTER INDEX %s RENAME TO %I', v_index.idx, v_index.old);  -- a key's constraint too
         END IF;
-    END LOOP;
-    EXECUTE format('ALTER VIEW tgsis.%I RENAME TO %I', p_table || '_face', p_table);
-    PERFORM tgsis.create_chunk_view(p_table);
-    FOR v_acl IN SELECT a.grantee, a.privilege_type FROM aclexplode(v_viewacl) AS a
-                  WHERE a.grantee <> (SELECT c.relowner FROM pg_class c WHERE c.oid = v_new) LOOP
-        EXECUTE format('GRANT %s ON tgsis.%I TO %s', v_acl.privilege_type, p_table || '_chunk_rows',
-                       CASE WHEN v_acl.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_acl.grantee)) END);
     END LOOP;
     IF EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table) THEN
         PERFORM tgsis.guard_chunk_storage(p_table);  -- the rights, labels and notes its triggers kept
@@ -208,4 +203,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.partition_chunk_storage(text, integer, boolean) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.partition_chunk_storage(text, integer, boolean) IS
-    'hash-partition tgsis.<table>_chunk of a model table stored in chunks by geoid in 2 to 1024 partitions <table>_chunk_p<r> (the scheme of tgsis.partition_model_storage, which calls it), its chunk versions moved and verified bit for bit (TG000 on a difference), the face tgsis.<table>, tgsis.<table>_chunk_rows, the rights, row-level security and the guards of versioned storage made again as they were; TG202 when partitioned already or used by other objects; p_check_only: lock and check only; returns the chunk versions moved';
+    'hash-partition tgsis.<table>_chunk of a model table stored in chunks by geoid in 2 to 1024 partitions <table>_chunk_p<r> (the scheme of tgsis.partition_model_storage, which calls it), its chunk versions moved and verified bit for bit (TG000 on a difference), the face tgsis.<table> and tgsis.<table>_chunk_rows kept (the same views, reading the new table), the rights, row-level security and the guards of versioned storage made again as they were; TG202 when partitioned already or when other objects use the chunk table; p_check_only: lock and check only; returns the chunk versions moved';
