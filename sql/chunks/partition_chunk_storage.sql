@@ -141,7 +141,7 @@ BEGIN
                        v_name || '_p' || v_r, v_new, p_partitions, v_r);
         EXECUTE format('ALTER TABLE tgsis.%I OWNER TO %I', v_name || '_p' || v_r, v_owner);
         EXECUTE format('COMMENT ON TABLE tgsis.%I IS %L', v_name || '_p' || v_r,
-                       format('partition %s of %s of tgsis.%s (hash of geoid; tgsis.partition_model_storage)',
+                       format('partition %s of %s of tgsis.%s (hash of geoid; partition_model_storage)',
                               v_r + 1, p_partitions, v_name));
     END LOOP;
     FOR v_acl IN SELECT a.grantee, a.privilege_type, a.is_grantable
