@@ -336,3 +336,47 @@ def test_a_writer_in_flight_is_waited_for(db_dsn: str, conn: Conn, writer_commit
             assert conn.execute("SELECT relkind FROM pg_class WHERE oid = 'tgsis.times'::regclass").fetchone() == ("p",)
     finally:
         writer.close()
+
+
+@pytest.mark.storage("rows")
+def test_switching_partitioned_rows_to_chunks_keeps_the_partitions_and_every_version(
+    conn: Conn, partitioned: list[str], horizons: Any
+) -> None:
+    mesh = _grid(40)  # 1,600 vertices: two chunks of vertices per object
+    ids = [tgsis.insert_feature(conn, horizons, mesh) for _ in range(4)]
+    conn.commit()
+    tgsis.enable_feature_versioning(conn)
+    tgsis.create_version(conn, "edit")
+    with tgsis.in_version(conn, "edit"):
+        out = tgsis.checkout(conn, ids[0], horizons.name)
+        moved = out.mesh.vertices.copy()
+        moved[1500:1510, 2] += 4.0
+        edited = tgsis.Surface(moved, out.mesh.cells, vertex_properties=out.mesh.vertex_properties)
+        tgsis.checkin(conn, out, edited)
+    conn.commit()
+
+    def seen() -> dict[str, list[Any]]:
+        views = {}
+        for version in ("DEFAULT", "edit"):
+            with tgsis.in_version(conn, version):
+                views[version] = [
+                    conn.execute("SELECT * FROM tgsis.vrtx ORDER BY geoid, vrtxid").fetchall(),
+                    conn.execute("SELECT * FROM tgsis.trgl ORDER BY geoid, trglid").fetchall(),
+                ]
+        return views
+
+    before = seen()
+    chunked = [
+        r[0] for r in conn.execute("SELECT tablename FROM tgsis.model_tables WHERE chunkcolumn IS NOT NULL ORDER BY 1")
+    ]
+    for table in chunked:  # what the upgrade does (the storage switch), on partitioned row storage
+        conn.execute("SELECT tgsis.store_in_chunks(%s)", (table,))
+    conn.commit()
+    for table in chunked:
+        assert _in_chunks(conn, table), table
+        assert len(_partitions(conn, _storage(conn, table))) == PARTITIONS, table  # partitioned as the rows were
+    assert seen() == before
+    tgsis.merge_version(conn, "edit")
+    conn.commit()
+    assert geometry_of(tgsis.fetch_feature(conn, horizons, ids[0])).same_as(edited)
+    assert geometry_of(tgsis.fetch_feature(conn, horizons, ids[1])).same_as(mesh)
