@@ -163,24 +163,39 @@ def test_refusals_change_nothing(conn: Conn, fault_clone: int) -> None:
     assert state == "TG201" and "stored in chunks already" in message
 
 
-def test_partitioned_storage_is_not_switched(conn: Conn) -> None:
-    """A chunk table is plain: switching storage the DBA partitioned would undo the partitioning without a word."""
+@pytest.mark.storage("rows")
+def test_partitioned_storage_is_switched_into_chunks_partitioned_alike(conn: Conn) -> None:
+    """Switching storage the DBA partitioned keeps the partitioning: the chunk table is partitioned the same way."""
     tgsis.partition_model_storage(conn, 1, 4)
     conn.commit()
-    state, message = sqlstate(conn, "SELECT tgsis.store_in_chunks('trgl')")
-    assert state == "TG100" and "partitioned" in message
+    conn.execute("SELECT tgsis.store_in_chunks('trgl')")
+    conn.commit()
     assert conn.execute(
-        "SELECT tgsis.stored_in_chunks('trgl'), to_regclass('tgsis.trgl_chunk'), "
-        "(SELECT relkind FROM pg_class WHERE oid = 'tgsis.trgl'::regclass)"
+        "SELECT tgsis.stored_in_chunks('trgl'), c.relkind, (SELECT count(*) FROM pg_inherits i WHERE i.inhparent = c.oid) "
+        "FROM pg_class c WHERE c.oid = 'tgsis.trgl_chunk'::regclass"
+    ).fetchone() == (True, "p", 4)
+    # storage partitioned otherwise (a partition detached: 3 partitions of modulus 4) is refused, nothing changed
+    conn.execute("ALTER TABLE tgsis.vrtx DETACH PARTITION tgsis.vrtx_p3")
+    conn.commit()
+    state, message = sqlstate(conn, "SELECT tgsis.store_in_chunks('vrtx')")
+    assert state == "TG100" and "partitioned otherwise" in message, message
+    assert conn.execute(
+        "SELECT tgsis.stored_in_chunks('vrtx'), to_regclass('tgsis.vrtx_chunk'), "
+        "(SELECT relkind FROM pg_class WHERE oid = 'tgsis.vrtx'::regclass)"
     ).fetchone() == (False, None, "p")
 
 
-def test_storage_in_chunks_is_not_partitioned_and_says_why(conn: Conn) -> None:
+@pytest.mark.storage("rows")
+def test_storage_in_chunks_is_partitioned_beside_rows(conn: Conn) -> None:
     conn.execute("SELECT tgsis.store_in_chunks('point')")
     conn.commit()
-    state, message = sqlstate(conn, "SELECT tgsis.partition_model_storage(1, 4)")
-    assert state == "TG202" and "stored in chunks" in message and "made it a view" not in message, message
-    assert conn.execute("SELECT relkind FROM pg_class WHERE oid = 'tgsis.vrtx'::regclass").fetchone() == ("r",)
+    tables = tgsis.partition_model_storage(conn, 1, 4)
+    assert {"point", "vrtx"} <= set(tables)
+    kinds = conn.execute(
+        "SELECT c.relname, c.relkind FROM pg_class c WHERE c.oid IN ('tgsis.vrtx'::regclass, 'tgsis.point_chunk'::regclass, "
+        "'tgsis.point'::regclass) ORDER BY 1"
+    ).fetchall()
+    assert kinds == [("point", "v"), ("point_chunk", "p"), ("vrtx", "p")]  # the face stays a view over its chunks
 
 
 def test_roles_of_tgsis_may_not_switch(db_dsn: str, conn: Conn, fault_clone: int) -> None:

@@ -141,7 +141,8 @@ NOT_FROM_THE_CLI = {
     "src/tgsis/formats/pvd.py": "write_pvd of Python objects",
     "src/tgsis/db/adapters.py": "psycopg adapters for Python programs (tgsis.register_types): no command",
     "sql/model4/gmap_conditions.sql": "an SQL building block of gmap_check and md_check, which the command calls with valid arguments",
-    "sql/geometry/partition_model_storage.sql": "a DBA's set-up step, SQL and Python only (docs/scaling.md): no command",
+    "sql/storage/partition_model_storage.sql": "a DBA's set-up step, SQL and Python only (docs/scaling.md): no command",
+    "sql/chunks/partition_chunk_storage.sql": "the chunk part of partition_model_storage, a DBA's set-up step: no command",
     "sql/core/no_model_rule.sql": "a data model the registry lacks: only SQL and Python callers can name one "
     "(the commands work on stored features, whose models are registered)",
     "sql/geometry/class_denied_geoids.sql": "the privilege argument of an internal check tgsis's own code calls",

@@ -31,9 +31,10 @@ def _room(conn: Conn) -> int:
 
 
 def _plain(conn: Conn) -> list[Any]:
+    """Model 1's tables and the kind of the relation storing each (the table, or its chunk table)."""
     return conn.execute(
-        "SELECT c.relname, c.relkind FROM tgsis.model_tables t JOIN pg_class c "
-        "ON c.oid = format('tgsis.%I', t.tablename)::regclass WHERE t.model = 1 ORDER BY 1"
+        "SELECT t.tablename, c.relkind FROM tgsis.model_tables t JOIN pg_class c "
+        "ON c.oid = tgsis.storage_table('tgsis', t.tablename)::regclass WHERE t.model = 1 ORDER BY 1"
     ).fetchall()
 
 
@@ -71,5 +72,7 @@ def test_both_sides_of_the_limit(conn: Conn) -> None:
     conn.commit()
     assert set(tables) == {name for name, _ in before}
     assert {kind for _, kind in _plain(conn)} == {"p"}
-    row = conn.execute("SELECT count(*) FROM pg_inherits WHERE inhparent = 'tgsis.vrtx'::regclass").fetchone()
+    row = conn.execute(
+        "SELECT count(*) FROM pg_inherits WHERE inhparent = tgsis.storage_table('tgsis', 'vrtx')::regclass"
+    ).fetchone()
     assert row == (most,)

@@ -52,6 +52,29 @@ def partitioned(db_dsn: str) -> list[str]:
         return tgsis.partition_model_storage(conn, 1, PARTITIONS)
 
 
+def _in_chunks(conn: Conn, table: str) -> bool:
+    """Whether the model table is stored in chunks (``tgsis.stored_in_chunks``)."""
+    return bool(conn.execute("SELECT tgsis.stored_in_chunks(%s)", (table,)).fetchone() == (True,))
+
+
+def _storage(conn: Conn, table: str) -> str:
+    """The relation storing a model table's rows (``tgsis.storage_table``): <table>_ver, <table>_chunk or the table."""
+    return str(conn.execute("SELECT tgsis.storage_table('tgsis', %s)", (table,)).fetchone()[0])  # type: ignore[index]
+
+
+def _partitions(conn: Conn, relation: str) -> list[str]:
+    """The partitions of a partitioned relation (``schema.name``), in order; [] for another kind."""
+    return [
+        r[0]
+        for r in conn.execute(
+            "SELECT format('%%I.%%I', n.nspname, c.relname) FROM pg_inherits i JOIN pg_class c ON c.oid = i.inhrelid "
+            "JOIN pg_namespace n ON n.oid = c.relnamespace JOIN pg_class p ON p.oid = i.inhparent "
+            "WHERE i.inhparent = %s::regclass AND p.relkind = 'p' ORDER BY c.relname",
+            (relation,),
+        ).fetchall()
+    ]
+
+
 def _grid(side: int) -> tgsis.Surface:
     u, v = np.meshgrid(np.arange(side, dtype=float), np.arange(side, dtype=float))
     vertices = np.stack([u.ravel(), v.ravel(), np.sin(u.ravel()) + v.ravel()], axis=1)
@@ -72,15 +95,9 @@ def test_the_storage_is_partitioned_and_versioning_keeps_it_so(
     conn.commit()
     tgsis.enable_feature_versioning(conn)
     for table in ("vrtx", "trgl"):
-        row = conn.execute(
-            "SELECT c.relkind, (SELECT count(*) FROM pg_inherits i WHERE i.inhparent = c.oid) "
-            "FROM pg_class c WHERE c.oid = %s::regclass",
-            (f"tgsis.{table}_ver",),
-        ).fetchone()
-        assert row == ("p", PARTITIONS), table
-        used = conn.execute(
-            sql.SQL("SELECT count(DISTINCT tableoid) FROM {}").format(sql.Identifier("tgsis", f"{table}_ver"))
-        ).fetchone()
+        storage = _storage(conn, table)  # <table>_ver on rows, <table>_chunk on chunks
+        assert len(_partitions(conn, storage)) == PARTITIONS, table
+        used = conn.execute(sql.SQL("SELECT count(DISTINCT tableoid) FROM {}").format(sql.SQL(storage))).fetchone()
         assert used is not None and used[0] > 1, table  # twelve geometries spread over the partitions
     assert all(geometry_of(tgsis.fetch_feature(conn, horizons, i)).same_as(_grid(6)) for i in ids)
 
@@ -104,15 +121,22 @@ def test_an_editor_checks_in_and_a_merge_brings_it_home(db_dsn: str, conn: Conn,
         editor.commit()
         assert geometry_of(tgsis.fetch_feature(editor, horizons.name, geoid)).same_as(edited)
         # a partition by name is not the editor's to write: the parent's rights are
+        part = _partitions(editor, _storage(editor, "vrtx"))[0]
+        editor.rollback()
         with pytest.raises(psycopg.errors.InsufficientPrivilege):
-            editor.execute("INSERT INTO tgsis.vrtx_p0 VALUES (1, 1, 0, 0, 0, 0)")
+            editor.execute(sql.SQL("INSERT INTO {} (geoid) VALUES (1)").format(sql.SQL(part)))
         editor.rollback()
     assert geometry_of(tgsis.fetch_feature(conn, horizons, geoid)).same_as(mesh)  # DEFAULT untouched until the merge
     tgsis.merge_version(conn, "edit")
     conn.commit()
     assert geometry_of(tgsis.fetch_feature(conn, horizons, geoid)).same_as(edited)
-    closed = conn.execute("SELECT count(*) FROM tgsis.vrtx_ver WHERE geoid = %s AND revclosed", (geoid,)).fetchone()
-    assert closed == (5,)  # the five moved vertices' old row versions, closed by the merge; nothing else
+    storage = _storage(conn, "vrtx")
+    closed = conn.execute(
+        sql.SQL("SELECT count(*) FROM {} WHERE geoid = %s AND revclosed").format(sql.SQL(storage)), (geoid,)
+    ).fetchone()
+    # the five moved vertices' old row versions, closed by the merge, nothing else; on chunks their one
+    # chunk's old version (the counts are chunk versions there: docs/storage.md, "What differs from rows")
+    assert closed == ((1,) if _in_chunks(conn, "vrtx") else (5,))
 
 
 def test_dump_and_restore_keep_the_partitioned_model_storage(
@@ -131,13 +155,9 @@ def test_dump_and_restore_keep_the_partitioned_model_storage(
         tgsis.checkin(conn, out, edited)
     conn.commit()
     with _restored(pg, _bindir_of(pg), db_dsn, "custom", tmp_path) as dsn, psycopg.connect(dsn) as restored:
-        for table in ("vrtx_ver", "trgl_ver"):
-            row = restored.execute(
-                "SELECT c.relkind, (SELECT count(*) FROM pg_inherits i WHERE i.inhparent = c.oid) "
-                "FROM pg_class c WHERE c.oid = %s::regclass",
-                (f"tgsis.{table}",),
-            ).fetchone()
-            assert row == ("p", PARTITIONS), table
+        for table in ("vrtx", "trgl"):
+            storage = _storage(restored, table)
+            assert len(_partitions(restored, storage)) == PARTITIONS, table
         assert geometry_of(tgsis.fetch_feature(restored, horizons.name, geoid)).same_as(mesh)
         with tgsis.in_version(restored, "edit"):
             assert geometry_of(tgsis.fetch_feature(restored, horizons.name, geoid)).same_as(edited)
@@ -147,8 +167,17 @@ def test_dump_and_restore_keep_the_partitioned_model_storage(
 
 
 def _definition(conn: Conn, table: str) -> list[Any]:
-    """What partitioning must keep of a model table: columns, constraints, index names and shapes, comments, owner, rights."""
-    rel = f"tgsis.{table}"
+    """What partitioning must keep of a model table: columns, constraints, index names and shapes, comments, owner,
+    rights, row-level security and policies, triggers, a view's options and query; of a table stored in chunks,
+    also of its chunk table, chunk view and row definition."""
+    rels = [f"tgsis.{table}"]
+    if _in_chunks(conn, table):
+        rels += [f"tgsis.{table}_chunk", f"tgsis.{table}_chunk_rows", f"tgsis.{table}_shape"]
+    return [_relation(conn, rel) for rel in rels]
+
+
+def _relation(conn: Conn, rel: str) -> list[Any]:
+    """What partitioning must keep of one relation (``_definition``)."""
     return [
         conn.execute(
             "SELECT array_agg((a.attname, format_type(a.atttypid, a.atttypmod), a.attnotnull, "
@@ -174,6 +203,17 @@ def _definition(conn: Conn, table: str) -> list[Any]:
             "FROM pg_class c WHERE c.oid = %s::regclass",
             (rel,),
         ).fetchone(),
+        conn.execute(
+            "SELECT c.relrowsecurity, c.relforcerowsecurity, c.reloptions, "
+            "CASE WHEN c.relkind = 'v' THEN pg_get_viewdef(c.oid) END, "
+            "(SELECT array_agg((p.polname, p.polcmd, p.polroles::text, pg_get_expr(p.polqual, p.polrelid), "
+            "pg_get_expr(p.polwithcheck, p.polrelid), obj_description(p.oid, 'pg_policy')) ORDER BY p.polname)::text "
+            "FROM pg_policy p WHERE p.polrelid = c.oid), "
+            "(SELECT array_agg(regexp_replace(pg_get_triggerdef(t.oid), ' ON \\S+ ', ' ON _ ') ORDER BY t.tgname) "
+            "FROM pg_trigger t WHERE t.tgrelid = c.oid AND NOT t.tgisinternal) "
+            "FROM pg_class c WHERE c.oid = %s::regclass",
+            (rel,),
+        ).fetchone(),
     ]
 
 
@@ -195,13 +235,14 @@ def test_partitioning_keeps_every_definition_of_every_model(make_database: Any, 
             assert sorted(tgsis.partition_model_storage(conn, model, 3)) == sorted(tables[model])
         for table, definition in before.items():
             assert _definition(conn, table) == definition, table
+            storage = f"tgsis.{table}_chunk" if _in_chunks(conn, table) else f"tgsis.{table}"  # unversioned
             parts = conn.execute(
-                "SELECT c.relname, obj_description(c.oid, 'pg_class'), c.relacl FROM pg_inherits i "
-                "JOIN pg_class c ON c.oid = i.inhrelid WHERE i.inhparent = %s::regclass "
-                "ORDER BY 1",
-                (f"tgsis.{table}",),
+                "SELECT format('%%I.%%I', n.nspname, c.relname), obj_description(c.oid, 'pg_class'), c.relacl "
+                "FROM pg_inherits i JOIN pg_class c ON c.oid = i.inhrelid JOIN pg_namespace n ON n.oid = c.relnamespace "
+                "WHERE i.inhparent = %s::regclass ORDER BY 1",
+                (storage,),
             ).fetchall()
-            assert [p[0] for p in parts] == [f"{table}_p{r}" for r in range(3)]
+            assert [p[0] for p in parts] == [f"{storage}_p{r}" for r in range(3)]
             assert all(p[1] and p[2] is None for p in parts)  # commented; no rights of their own
 
 
@@ -295,3 +336,47 @@ def test_a_writer_in_flight_is_waited_for(db_dsn: str, conn: Conn, writer_commit
             assert conn.execute("SELECT relkind FROM pg_class WHERE oid = 'tgsis.times'::regclass").fetchone() == ("p",)
     finally:
         writer.close()
+
+
+@pytest.mark.storage("rows")
+def test_switching_partitioned_rows_to_chunks_keeps_the_partitions_and_every_version(
+    conn: Conn, partitioned: list[str], horizons: Any
+) -> None:
+    mesh = _grid(40)  # 1,600 vertices: two chunks of vertices per object
+    ids = [tgsis.insert_feature(conn, horizons, mesh) for _ in range(4)]
+    conn.commit()
+    tgsis.enable_feature_versioning(conn)
+    tgsis.create_version(conn, "edit")
+    with tgsis.in_version(conn, "edit"):
+        out = tgsis.checkout(conn, ids[0], horizons.name)
+        moved = out.mesh.vertices.copy()
+        moved[1500:1510, 2] += 4.0
+        edited = tgsis.Surface(moved, out.mesh.cells, vertex_properties=out.mesh.vertex_properties)
+        tgsis.checkin(conn, out, edited)
+    conn.commit()
+
+    def seen() -> dict[str, list[Any]]:
+        views = {}
+        for version in ("DEFAULT", "edit"):
+            with tgsis.in_version(conn, version):
+                views[version] = [
+                    conn.execute("SELECT * FROM tgsis.vrtx ORDER BY geoid, vrtxid").fetchall(),
+                    conn.execute("SELECT * FROM tgsis.trgl ORDER BY geoid, trglid").fetchall(),
+                ]
+        return views
+
+    before = seen()
+    chunked = [
+        r[0] for r in conn.execute("SELECT tablename FROM tgsis.model_tables WHERE chunkcolumn IS NOT NULL ORDER BY 1")
+    ]
+    for table in chunked:  # what the upgrade does (the storage switch), on partitioned row storage
+        conn.execute("SELECT tgsis.store_in_chunks(%s)", (table,))
+    conn.commit()
+    for table in chunked:
+        assert _in_chunks(conn, table), table
+        assert len(_partitions(conn, _storage(conn, table))) == PARTITIONS, table  # partitioned as the rows were
+    assert seen() == before
+    tgsis.merge_version(conn, "edit")
+    conn.commit()
+    assert geometry_of(tgsis.fetch_feature(conn, horizons, ids[0])).same_as(edited)
+    assert geometry_of(tgsis.fetch_feature(conn, horizons, ids[1])).same_as(mesh)

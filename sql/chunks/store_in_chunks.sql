@@ -20,8 +20,10 @@
 --    (fingerprints of the stored versions) are renewed (tgsis.conflict_marks,
 --    tgsis.renew_conflict_marks).
 -- Views of the users' own over the table block the drop (PostgreSQL names
--- them, nothing changes). Refused by name: a table not registered for chunks
--- (TG200), one stored in chunks already (TG201), partitioned storage (TG100). Returns the chunk versions
+-- them, nothing changes). Partitioned storage (tgsis.partition_model_storage)
+-- gives a chunk table partitioned the same way (tgsis.partition_chunk_storage).
+-- Refused by name: a table not registered for chunks (TG200), one stored in
+-- chunks already (TG201), storage partitioned another way (TG100). Returns the chunk versions
 -- written. Internal (tgsis's owner: it creates and drops the storage).
 CREATE FUNCTION tgsis.store_in_chunks(p_table text)
 RETURNS bigint
@@ -38,6 +40,7 @@ DECLARE
     v_n         bigint;
     v_name      text;
     v_marks     jsonb;
+    v_parts     integer;
 BEGIN
     PERFORM FROM tgsis.chunk_columns(p_table);  -- TG200 not registered for chunks, TG100 does not fit
     IF tgsis.stored_in_chunks(p_table) THEN
@@ -49,12 +52,21 @@ BEGIN
             USING ERRCODE = 'TG201', DETAIL = 'The storage switch needs these names for the row definition and the new face.';
     END IF;
     v_storage := tgsis.storage_table('tgsis', p_table)::regclass;
-    -- a chunk table is made plain: switching partitioned storage would undo the DBA's partitioning silently
+    -- partitioned storage (tgsis.partition_model_storage: HASH (geoid), N partitions of modulus N): the chunk
+    -- table is partitioned the same way once filled (tgsis.partition_chunk_storage); another scheme is refused
     IF (SELECT c.relkind FROM pg_class c WHERE c.oid = v_storage) = 'p' THEN
-        RAISE EXCEPTION '% is partitioned (tgsis.partition_model_storage), and its chunks would not be', v_storage
-            USING ERRCODE = 'TG100',
-                  DETAIL = 'The chunk table of a partitioned storage is not partitioned yet (docs/storage.md, "The storage switch").',
-                  HINT = 'keep this table stored as rows';
+        v_parts := (SELECT count(*) FROM pg_inherits i WHERE i.inhparent = v_storage);
+        IF NOT EXISTS (SELECT FROM pg_partitioned_table pt JOIN pg_attribute a ON a.attrelid = pt.partrelid AND a.attnum = pt.partattrs[0]
+                        WHERE pt.partrelid = v_storage AND pt.partstrat = 'h' AND pt.partnatts = 1 AND a.attname = 'geoid')
+           OR v_parts NOT BETWEEN 2 AND 1024
+           OR EXISTS (SELECT FROM pg_inherits i JOIN pg_class c ON c.oid = i.inhrelid
+                       WHERE i.inhparent = v_storage
+                         AND (c.relkind <> 'r' OR pg_get_expr(c.relpartbound, c.oid) NOT LIKE format('FOR VALUES WITH (modulus %s,%%', v_parts))) THEN
+            RAISE EXCEPTION '% is partitioned otherwise than by tgsis.partition_model_storage, which its chunks would not be', v_storage
+                USING ERRCODE = 'TG100',
+                      DETAIL = 'A chunk table is partitioned as tgsis.partition_model_storage partitions: by HASH (geoid), N partitions of modulus N.',
+                      HINT = 'keep this table stored as rows';
+        END IF;
     END IF;
     SELECT * INTO v_versioned FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table;
 
@@ -112,6 +124,9 @@ BEGIN
     IF v_versioned.tablename IS NOT NULL THEN
         PERFORM tgsis.guard_chunk_storage(p_table);  -- the rights, labels and notes <table>_ver's triggers kept
     END IF;
+    IF v_parts IS NOT NULL THEN
+        PERFORM tgsis.partition_chunk_storage(p_table, v_parts);  -- as the row storage was, verified again
+    END IF;
     PERFORM tgsis.renew_conflict_marks(v_marks);
     RETURN v_n;
 END
@@ -120,4 +135,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.store_in_chunks(text) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.store_in_chunks(text) IS
-    'switch a model table registered for chunks from rows to chunks in one transaction: tgsis.<table>_chunk filled and verified (tgsis.rows_to_chunks), the row definition kept without rows as tgsis.<table>_shape, the row storage dropped and tgsis.<table> made the face over the chunks (tgsis.create_chunk_face, the grants of the relation it replaces); returns the chunk versions written; TG201 when stored in chunks already';
+    'switch a model table registered for chunks from rows to chunks in one transaction: tgsis.<table>_chunk filled and verified (tgsis.rows_to_chunks), the row definition kept without rows as tgsis.<table>_shape, the row storage dropped and tgsis.<table> made the face over the chunks (tgsis.create_chunk_face, the grants of the relation it replaces); partitioned storage (tgsis.partition_model_storage) gives a chunk table partitioned the same way; returns the chunk versions written; TG201 when stored in chunks already';

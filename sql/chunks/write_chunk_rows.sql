@@ -76,8 +76,8 @@ DECLARE
     v_newk     text;      -- the chunk key of a p_rows row r
     v_vis      text := '(c.revision = ANY ($1)) IS TRUE AND NOT (c.lastrevs && $1)';
     v_todo     text[];    -- NULL: every touched chunk; else the chunk keys (as text) still to write
-    v_locked   tid[];
-    v_new      tid[];
+    v_locked   text[];  -- the places (tableoid:ctid: partitioned storage is many tables) of the locked versions
+    v_new      text[];
     v_more     boolean;
     v_done     bigint;
     v_total    bigint := 0;
@@ -256,7 +256,7 @@ BEGIN
 WITH k AS (
     SELECT DISTINCT {newk_as} FROM {rows} r WHERE {todo}
 ), v AS (
-    SELECT c.ctid AS vtid, c.* FROM {chunk} c JOIN k ON {match_c_k} WHERE {vis}
+    SELECT c.tableoid AS vtoid, c.ctid AS vtid, c.* FROM {chunk} c JOIN k ON {match_c_k} WHERE {vis}
 ), old AS (
     SELECT {v_K}, u.o AS slot, {decoded}
       FROM v CROSS JOIN LATERAL unnest({arrays}) WITH ORDINALITY AS u({alias}, o)
@@ -280,22 +280,25 @@ WITH k AS (
      WHERE e.last IS NOT NULL
      GROUP BY {e_K}, e.vmin, e.fits
 ), same AS (
-    SELECT v.vtid FROM v JOIN n ON {match_v_n} WHERE {same}
+    SELECT v.vtoid, v.vtid FROM v JOIN n ON {match_v_n} WHERE {same}
 ), upd AS (
     UPDATE {chunk} c SET {setcols} FROM v, n
-     WHERE c.ctid = v.vtid AND v.revision = $2 AND {match_v_n} AND NOT EXISTS (SELECT FROM same s WHERE s.vtid = v.vtid)
+     WHERE c.tableoid = v.vtoid AND c.ctid = v.vtid AND v.revision = $2 AND {match_v_n}
+       AND NOT EXISTS (SELECT FROM same s WHERE s.vtoid = v.vtoid AND s.vtid = v.vtid)
     RETURNING {c_K}
 ), del AS (
     DELETE FROM {chunk} c USING v, e
-     WHERE c.ctid = v.vtid AND v.revision = $2 AND {match_v_e} AND e.last IS NULL
+     WHERE c.tableoid = v.vtoid AND c.ctid = v.vtid AND v.revision = $2 AND {match_v_e} AND e.last IS NULL
     RETURNING {c_K}
 ), cls AS (
     UPDATE {chunk} c SET lastrevs = c.lastrevs || $2 FROM v
-     WHERE c.ctid = v.vtid AND v.revision <> $2 AND NOT EXISTS (SELECT FROM same s WHERE s.vtid = v.vtid)
+     WHERE c.tableoid = v.vtoid AND c.ctid = v.vtid AND v.revision <> $2
+       AND NOT EXISTS (SELECT FROM same s WHERE s.vtoid = v.vtoid AND s.vtid = v.vtid)
     RETURNING {c_K}
 ), fresh AS (  -- the new versions: no visible one is W's or already holds this content
     SELECT n.* FROM n
-     WHERE NOT EXISTS (SELECT FROM v WHERE {match_v_n} AND (v.revision = $2 OR EXISTS (SELECT FROM same s WHERE s.vtid = v.vtid)))
+     WHERE NOT EXISTS (SELECT FROM v WHERE {match_v_n}
+                         AND (v.revision = $2 OR EXISTS (SELECT FROM same s WHERE s.vtoid = v.vtoid AND s.vtid = v.vtid)))
 ), ins AS (
     INSERT INTO {chunk} ({inscols})
     SELECT {insvals} FROM fresh n
@@ -313,15 +316,15 @@ $q$;
       FROM regexp_matches(v_sql, '(\{[A-Za-z_]+\})|([^{]+|\{)', 'g') WITH ORDINALITY AS t(m, o);
     v_lock := format(
         'SELECT coalesce(array_agg(l.t), ''{}'') FROM (
-           SELECT c.ctid AS t FROM %1$s c
+           SELECT c.tableoid::text || '':'' || c.ctid::text AS t FROM %1$s c
             WHERE (%2$s) IN (SELECT %3$s FROM %4$s r WHERE ($3::text[] IS NULL OR ROW(%3$s)::text = ANY ($3)))
-              AND %5$s AND c.ctid <> ALL ($4)
+              AND %5$s AND c.tableoid::text || '':'' || c.ctid::text <> ALL ($4)
             ORDER BY %2$s FOR UPDATE OF c) l',
         v_chunk, v_parts->>'c_K', v_newk, v_rows, v_vis);
     v_unlocked := format(
         'SELECT EXISTS (SELECT FROM %1$s c
             WHERE (%2$s) IN (SELECT %3$s FROM %4$s r WHERE ($3::text[] IS NULL OR ROW(%3$s)::text = ANY ($3)))
-              AND %5$s AND c.ctid <> ALL ($4))',
+              AND %5$s AND c.tableoid::text || '':'' || c.ctid::text <> ALL ($4))',
         v_chunk, v_parts->>'c_K', v_newk, v_rows, v_vis);
 
     LOOP

@@ -7,7 +7,8 @@
 -- whose table it lacks the right (tgsis.class_denied_geoids): SELECT to read
 -- them, UPDATE to insert or change them, UPDATE or DELETE to delete them.
 -- The policies sit on the storage: the table while it is plain, <table>_ver
--- once versioned (a rename keeps them). They guard the roles' own statements
+-- once versioned (a rename keeps them), <table>_chunk once stored in chunks
+-- (tgsis.store_in_chunks copies them there: the face is a view). They guard the roles' own statements
 -- on the storage; the versioned views read it as their owner, whom they
 -- spare, and filter by the same set themselves as security barriers
 -- (tgsis.create_versioned_view).
@@ -29,7 +30,9 @@ DECLARE
 BEGIN
     FOR v_t IN SELECT t.tablename, t.geoidcolumn FROM tgsis.model_tables t
                 WHERE t.model = p_model AND t.geoidcolumn IS NOT NULL ORDER BY t.tablename LOOP
-        v_rel := coalesce(to_regclass(format('tgsis.%I', v_t.tablename || '_ver')), to_regclass(format('tgsis.%I', v_t.tablename)));
+        v_rel := coalesce(to_regclass(format('tgsis.%I', v_t.tablename || '_ver')),
+                          to_regclass(format('tgsis.%I', v_t.tablename || CASE WHEN tgsis.stored_in_chunks(v_t.tablename)
+                                                                                 THEN '_chunk' ELSE '' END)));
         CONTINUE WHEN v_rel IS NULL;
         -- a row a collection owns (tgsis.geometry.collection) is that collection's class's: it may be
         -- made or moved there only by a role that may change that class
@@ -63,4 +66,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.protect_model_tables(smallint) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.protect_model_tables(smallint) IS
-    'enable row-level security on the storage tables of a data model that hold rows per geoid, with policies keyed by the rights on the feature classes (tgsis.class_denied_geoids); idempotent; called by tgsis.create_storage, tgsis.partition_model_storage and the upgrade';
+    'enable row-level security on the storage tables of a data model that hold rows per geoid (<table>_ver when versioned, <table>_chunk when stored in chunks), with policies keyed by the rights on the feature classes (tgsis.class_denied_geoids); idempotent; called by tgsis.create_storage, tgsis.partition_model_storage and the upgrade';

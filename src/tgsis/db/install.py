@@ -641,6 +641,8 @@ def partition_model_storage(conn: psycopg.Connection[Any], model: int, partition
     once after :func:`install`, before storing data of that model and before
     :func:`tgsis.enable_feature_versioning`. The tables keep their
     definitions, index names, comments, owner and the group roles' rights.
+    A table stored in chunks has its chunk table partitioned with its data,
+    versioned or not (verified; its face stays the same view).
 
     Parameters
     ----------
@@ -666,7 +668,8 @@ def partition_model_storage(conn: psycopg.Connection[Any], model: int, partition
     NotFoundError
         No such data model.
     InUseError
-        A table holds rows, is versioned or is partitioned already (nothing is changed).
+        A row table holds rows or is versioned, a table is partitioned already, or other objects use it
+        (nothing is changed).
     MissingPrivilegeError
         The role may not run it or does not own the tables.
     """

@@ -15,6 +15,10 @@
 -- plain. The partitions grant nothing of their own, as enable_versioning
 -- requires. Run it as the tables' owner (the role that installed tgsis) or
 -- a superuser; PUBLIC may not.
+-- A table stored in chunks (tgsis.store_in_chunks) has its chunk table
+-- tgsis.<table>_chunk partitioned the same way, with its data, versioned or
+-- not, its face and chunk view made again (tgsis.partition_chunk_storage, the
+-- chunk layer's part: this function lives in the storage layer, below it).
 -- Every partition made holds locks until the transaction ends (its table,
 -- row type, indexes and their constraints, TOAST table and index), and
 -- PostgreSQL's shared lock table is sized for max_locks_per_transaction x
@@ -49,6 +53,7 @@ DECLARE
     v_cost    bigint;
     v_fixed   bigint;
     v_room    bigint;
+    v_swapped boolean := false;
 BEGIN
     PERFORM tgsis.require_storage();  -- a bare CREATE EXTENSION: say what to run (geometry/require_storage.sql)
     IF p_partitions IS NULL OR p_partitions NOT BETWEEN 2 AND 1024 THEN
@@ -71,7 +76,9 @@ BEGIN
     SELECT sum(2 + 2 * (SELECT count(*) FROM pg_index i WHERE i.indrelid = c.oid)
                + CASE WHEN c.reltoastrelid <> 0 THEN 3 ELSE 0 END), 30 * count(*)
       INTO v_cost, v_fixed
-      FROM unnest(v_tables) AS t(tablename) JOIN pg_class c ON c.oid = to_regclass(format('tgsis.%I', t.tablename));
+      FROM unnest(v_tables) AS t(tablename)
+      JOIN pg_class c ON c.oid = to_regclass(format('tgsis.%I', t.tablename || CASE WHEN tgsis.stored_in_chunks(t.tablename)
+                                                                                     THEN '_chunk' ELSE '' END));
     v_room := current_setting('max_locks_per_transaction')::bigint
               * (current_setting('max_connections')::bigint + current_setting('max_prepared_transactions')::bigint);
     IF p_partitions * v_cost + v_fixed > v_room THEN
@@ -88,6 +95,10 @@ BEGIN
 
     -- every table first: locked, then checked; nothing is changed before all pass
     FOREACH v_table IN ARRAY v_tables LOOP
+        IF tgsis.stored_in_chunks(v_table) THEN  -- locked and checked by the chunk layer: kept with its data
+            PERFORM tgsis.partition_chunk_storage(v_table, p_partitions, true);
+            CONTINUE;
+        END IF;
         IF to_regclass(format('tgsis.%I', v_table)) IS NOT NULL THEN
             -- first the lock (it waits for writers, and for a concurrent call, whose tables the name then gives)
             EXECUTE format('LOCK TABLE tgsis.%I IN ACCESS EXCLUSIVE MODE', v_table);
@@ -98,9 +109,7 @@ BEGIN
             RAISE EXCEPTION 'tgsis.% is not a plain table', v_table
                 USING ERRCODE = 'TG202',
                       DETAIL = CASE v_kind WHEN 'p' THEN 'it is partitioned already'
-                                           WHEN 'v' THEN CASE WHEN tgsis.stored_in_chunks(v_table)
-                                                              THEN 'it is stored in chunks (tgsis.store_in_chunks), whose tables are not partitioned yet'
-                                                              ELSE 'feature versioning made it a view of tgsis.' || v_table || '_ver' END
+                                           WHEN 'v' THEN 'feature versioning made it a view of tgsis.' || v_table || '_ver'
                                            ELSE 'it is missing' END,
                       HINT = 'partition the model tables once, before storing data and before tgsis.enable_feature_versioning()';
         END IF;
@@ -137,6 +146,11 @@ BEGIN
     END LOOP;
 
     FOREACH v_table IN ARRAY v_tables LOOP
+        IF tgsis.stored_in_chunks(v_table) THEN
+            PERFORM tgsis.partition_chunk_storage(v_table, p_partitions);  -- its rights made again there
+            CONTINUE;
+        END IF;
+        v_swapped := true;
         v_rel := format('tgsis.%I', v_table)::regclass;
         SELECT c.relowner::regrole::name, obj_description(c.oid, 'pg_class') INTO v_owner, v_comment
           FROM pg_class c WHERE c.oid = v_rel;
@@ -167,8 +181,10 @@ BEGIN
                                   v_r + 1, p_partitions, v_table));
         END LOOP;
     END LOOP;
-    PERFORM tgsis.grant_model_tables(p_model);
-    PERFORM tgsis.protect_model_tables(p_model);  -- LIKE ... INCLUDING ALL copies no policies
+    IF v_swapped THEN  -- the row tables made again (a chunk table keeps its own rights)
+        PERFORM tgsis.grant_model_tables(p_model);
+        PERFORM tgsis.protect_model_tables(p_model);  -- LIKE ... INCLUDING ALL copies no policies
+    END IF;
     RETURN v_tables;
 END
 $$;
@@ -176,4 +192,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.partition_model_storage(smallint, integer) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.partition_model_storage(smallint, integer) IS
-    'hash-partition the empty storage tables of a data model (1 to 5) by geoid in 2 to 1024 partitions (at most what the server''s lock table holds: max_locks_per_transaction x (max_connections + max_prepared_transactions) locks, about 4 per partition of each table; TG100 naming the largest number otherwise), keeping their definitions, index names, comments, owner, rights and per-class row-level security; refused (and nothing changed) when a table holds rows, is versioned or partitioned already; returns the tables';
+    'hash-partition the empty storage tables of a data model (1 to 5) by geoid in 2 to 1024 partitions (the chunk tables of tables stored in chunks with their data, versioned or not: tgsis.partition_chunk_storage) (at most what the server''s lock table holds: max_locks_per_transaction x (max_connections + max_prepared_transactions) locks, about 4 per partition of each table; TG100 naming the largest number otherwise), keeping their definitions, index names, comments, owner, rights and per-class row-level security; refused (and nothing changed) when a table holds rows, is versioned or partitioned already; returns the tables';
