@@ -157,6 +157,12 @@ class BuiltOnce(Protocol):
     def __call__(self, name: str, build: Callable[[Conn], int] | None = None, /) -> tuple[str, int]: ...
 
 
+class BuiltOnceByStorage(Protocol):
+    """The ``built_once_by_storage`` fixture: ``get(storage, name, build=None) -> (database, value)``."""
+
+    def __call__(self, storage: str, name: str, build: Callable[[Conn], int] | None = None, /) -> tuple[str, int]: ...
+
+
 # fixture name -> the set-up it gives, built on a connection (committed) and returning a value (a geoid)
 _BUILT_ONCE: dict[str, Callable[[Conn], int]] = {
     "fault_clone": _fault,  # tests.merge_data.make_fault: the curved fault in DEFAULT, version e1
@@ -169,35 +175,46 @@ _BUILT_ONCE: dict[str, Callable[[Conn], int]] = {
 
 
 @pytest.fixture(scope="session")
-def built_once(pg: TestServer, template_db: str) -> Iterator[BuiltOnce]:
+def built_once_by_storage(pg: TestServer, storage_templates: Callable[[str], str]) -> Iterator[BuiltOnceByStorage]:
+    """``get(storage, name, build=None) -> (database, value)``: :func:`built_once`'s set-ups, per storage."""
+    built: dict[tuple[str, str], tuple[str, int]] = {}
+    with contextlib.ExitStack() as stack:
+
+        def get(storage: str, name: str, build: Callable[[Conn], int] | None = None) -> tuple[str, int]:
+            if (storage, name) not in built:
+                database, dsn = stack.enter_context(pg.database("tgsis_once", storage_templates(storage)))
+                with psycopg.connect(dsn) as conn:
+                    value = (build or _BUILT_ONCE[name])(conn)
+                    conn.commit()
+                built[storage, name] = (database, value)
+            return built[storage, name]
+
+        yield get
+
+
+@pytest.fixture
+def built_once(db_storage: str, built_once_by_storage: BuiltOnceByStorage) -> BuiltOnce:
     """``get(name, build=None) -> (database, value)``: a set-up built at its first use, once per session.
 
     ``name`` is a fixture of ``_BUILT_ONCE``, or the name of ``build``, a set-up
     of a test module: listed in its ``BUILT_ONCE`` (``db_dsn`` below), or
     cloned by a ``db_dsn`` of the module's own (``test_sql_merge_feature_row.py``,
     one set-up per parameter). A name stands for one set-up, always built by
-    the same code.
+    the same code. Built on the template of the test's storage (its mark
+    ``storage``, else the default: ``db_storage``), once per storage.
     """
-    built: dict[str, tuple[str, int]] = {}
-    with contextlib.ExitStack() as stack:
 
-        def get(name: str, build: Callable[[Conn], int] | None = None) -> tuple[str, int]:
-            if name not in built:
-                database, dsn = stack.enter_context(pg.database("tgsis_once", template_db))
-                with psycopg.connect(dsn) as conn:
-                    value = (build or _BUILT_ONCE[name])(conn)
-                    conn.commit()
-                built[name] = (database, value)
-            return built[name]
+    def get(name: str, build: Callable[[Conn], int] | None = None) -> tuple[str, int]:
+        return built_once_by_storage(db_storage, name, build)
 
-        yield get
+    return get
 
 
 @pytest.fixture
 def db_dsn(
     request: pytest.FixtureRequest,
     make_database: Callable[..., str],
-    template_db: str,
+    storage_template_db: str,
     built_once: BuiltOnce,
 ) -> str:
     """The plugin's fresh database, or a clone of the set-up built once that the test asks for.
@@ -205,7 +222,8 @@ def db_dsn(
     The set-ups: ``_BUILT_ONCE``'s, and those a test module lists in its own
     ``BUILT_ONCE`` (fixture name -> set-up), named ``module.fixture`` in
     ``built_once``; the module's fixture of that name returns
-    ``built_once(f"{__name__}.fixture", set_up)[1]``.
+    ``built_once(f"{__name__}.fixture", set_up)[1]``. Of the test's storage
+    (the mark ``storage``) in both cases.
     """
     asked: list[tuple[str, Callable[[Conn], int] | None]] = [
         (name, None) for name in _BUILT_ONCE if name in request.fixturenames
@@ -215,7 +233,7 @@ def db_dsn(
         (f"{request.module.__name__}.{name}", build) for name, build in local.items() if name in request.fixturenames
     ]
     assert len(asked) <= 1, f"a test's database is the clone of one set-up, not of {[a[0] for a in asked]}"
-    return make_database(built_once(*asked[0])[0] if asked else template_db)
+    return make_database(built_once(*asked[0])[0] if asked else storage_template_db)
 
 
 @pytest.fixture

@@ -11,7 +11,7 @@ import psycopg
 import pytest
 
 from tests.local_helpers import child_env
-from tgsis.testing import TestServer, start_test_server
+from tgsis.testing import STORAGES, TestServer, default_storage, start_test_server
 
 BAD_DSN = "host=/nonexistent-socket-dir port=1 dbname=x connect_timeout=2"
 
@@ -83,3 +83,94 @@ def test_a_run_without_server_fails_instead_of_skipping(tmp_path: Path) -> None:
     assert result.returncode == 1, result.stdout
     assert "1 error" in result.stdout and "skipped" not in result.stdout
     assert "no PostgreSQL server for the tests" in result.stdout
+
+
+# ------------------------------------------------------------------ the mark storage (issue 40)
+
+
+def _model1_storage(conn: psycopg.Connection[Any]) -> set[str]:
+    """The storages of model 1's chunk tables in a database (one of them unless a test switched some)."""
+    rows = conn.execute(
+        "SELECT tgsis.stored_in_chunks(tablename) FROM tgsis.model_tables WHERE chunkcolumn IS NOT NULL"
+    ).fetchall()
+    assert len(rows) == 5
+    return {"chunks" if row[0] else "rows" for row in rows}
+
+
+@pytest.mark.parametrize("storage", STORAGES)
+def test_the_mark_storage_gives_databases_of_that_storage(
+    request: pytest.FixtureRequest, storage: str, make_database: Any, storage_templates: Any
+) -> None:
+    # the parametrized mark, as a test would write pytest.param(..., marks=pytest.mark.storage(storage))
+    request.node.add_marker(pytest.mark.storage(storage))
+    for fixture in ("db_storage", "conn", "tx"):
+        value = request.getfixturevalue(fixture)
+        if fixture == "db_storage":
+            assert value == storage
+        else:
+            assert _model1_storage(value) == {storage}, fixture
+    with psycopg.connect(make_database(request.getfixturevalue("storage_template_db"))) as other:
+        assert _model1_storage(other) == {storage}
+    with psycopg.connect(make_database(storage_templates(storage))) as other:
+        assert _model1_storage(other) == {storage}
+
+
+@pytest.mark.storage("rows")
+def test_a_marked_test_takes_its_set_up_built_once_on_its_storage(
+    conn: psycopg.Connection[Any], fault_clone: int
+) -> None:
+    assert _model1_storage(conn) == {"rows"}
+    assert conn.execute("SELECT count(*) > 0 FROM tgsis.vrtx WHERE geoid = %s", (fault_clone,)).fetchone() == (True,)
+
+
+@pytest.mark.storage("chunks")
+def test_a_test_marked_chunks_takes_its_set_up_built_once_on_chunks(
+    conn: psycopg.Connection[Any], fault_clone: int
+) -> None:
+    assert _model1_storage(conn) == {"chunks"}
+    assert conn.execute("SELECT count(*) > 0 FROM tgsis.vrtx WHERE geoid = %s", (fault_clone,)).fetchone() == (True,)
+
+
+def test_an_unmarked_test_has_the_default_storage(
+    conn: psycopg.Connection[Any], tx: psycopg.Connection[Any], template_db: str, storage_template_db: str
+) -> None:
+    assert _model1_storage(conn) == _model1_storage(tx) == {default_storage()}
+    assert template_db == storage_template_db
+
+
+@pytest.mark.storage("rows")
+class TestAMarkedClass:
+    def test_its_tests_have_its_storage(self, conn: psycopg.Connection[Any], db_storage: str) -> None:
+        assert db_storage == "rows"
+        assert _model1_storage(conn) == {"rows"}
+
+
+@pytest.mark.parametrize(
+    ("files", "env", "message"),
+    [
+        (
+            "import pytest\n@pytest.mark.storage('row')\ndef test_db(db_storage):\n    pass\n",
+            {},
+            "@pytest.mark.storage takes one storage of rows, chunks, not ('row',)",
+        ),
+        (
+            "def test_db(db_storage):\n    pass\n",
+            {"TGSIS_TEST_STORAGE": "chunk"},
+            "TGSIS_TEST_STORAGE='chunk' names no storage",
+        ),
+    ],
+)
+def test_a_storage_that_is_none_is_an_error_naming_it(
+    tmp_path: Path, files: str, env: dict[str, str], message: str
+) -> None:
+    (tmp_path / "conftest.py").write_text('pytest_plugins = ["tgsis.testing"]\n')
+    (tmp_path / "test_storage_mark.py").write_text(files)
+    result = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", str(tmp_path)],
+        env=child_env(TGSIS_TEST_DSN=BAD_DSN, **env),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 1, result.stdout
+    assert message in result.stdout, result.stdout

@@ -44,7 +44,21 @@ from tgsis.db.install import install
 from tgsis.db.local import LocalServer, find_binaries
 from tgsis.db.sqlsource import ExtensionSources, find_sql_dir
 
-__all__ = ["TestServer", "pg", "db_dsn", "conn", "tx", "make_database", "start_test_server"]
+__all__ = [
+    "STORAGES",
+    "TestServer",
+    "conn",
+    "db_dsn",
+    "db_storage",
+    "default_storage",
+    "make_database",
+    "pg",
+    "start_test_server",
+    "storage_of",
+    "storage_template_db",
+    "storage_templates",
+    "tx",
+]
 
 log = logging.getLogger(__name__)
 
@@ -276,26 +290,114 @@ def pg() -> Iterator[TestServer]:
         server.close()
 
 
-@pytest.fixture(scope="session")
-def template_db(pg: TestServer) -> Iterator[str]:
-    """Name of a database with tgsis installed, cloned by :func:`db_dsn`.
+STORAGES = ("rows", "chunks")
+"""The storages of model 1 a test database can have (docs/storage.md): ``rows`` or ``chunks``."""
 
-    Installed with ``CREATE EXTENSION`` when the server has the files, else
-    with the plain SQL.
+STORAGE_MARK = "storage"
+"""``@pytest.mark.storage("rows")``: the test's databases (``db_dsn``, ``conn``, ``tx``) have that storage."""
+
+
+def default_storage() -> str:
+    """The storage of the tests without the mark ``storage``: ``$TGSIS_TEST_STORAGE``, else ``rows``.
+
+    Raises
+    ------
+    pytest.UsageError
+        ``$TGSIS_TEST_STORAGE`` names no storage of :data:`STORAGES`.
     """
-    with pg.database("tgsis_tpl") as (name, dsn):
-        with psycopg.connect(dsn) as conn:
-            result = install(conn, method="extension" if pg.extension_files is None else "sql")
-            if os.environ.get("TGSIS_TEST_STORAGE") == "chunks":
-                # the storage switch of issue 40 (sql/chunks/store_in_chunks.sql), not yet the default: every
-                # table registered for chunks is stored in chunks in every database cloned from the template
-                with conn.transaction():
-                    conn.execute(
-                        "SELECT tgsis.store_in_chunks(tablename) FROM tgsis.model_tables"
-                        " WHERE chunkcolumn IS NOT NULL ORDER BY model, iudorder, tablename"
-                    )
-        _SESSION["template_method"] = result.method
-        yield name
+    value = os.environ.get("TGSIS_TEST_STORAGE") or "rows"
+    if value not in STORAGES:
+        raise pytest.UsageError(f"TGSIS_TEST_STORAGE={value!r} names no storage: use one of {', '.join(STORAGES)}")
+    return value
+
+
+def storage_of(node: pytest.Item | pytest.Collector | None) -> str:
+    """The storage a test asks for with ``@pytest.mark.storage(...)`` (closest mark), else :func:`default_storage`.
+
+    Raises
+    ------
+    pytest.UsageError
+        The mark names no storage of :data:`STORAGES`, or has not one argument.
+    """
+    mark = node.get_closest_marker(STORAGE_MARK) if node is not None else None
+    if mark is None:
+        return default_storage()
+    if len(mark.args) != 1 or mark.kwargs or mark.args[0] not in STORAGES:
+        raise pytest.UsageError(
+            f"{node.nodeid if node is not None else ''}: @pytest.mark.storage takes one storage of "
+            f"{', '.join(STORAGES)}, not {mark.args!r} {mark.kwargs or ''}".rstrip()
+        )
+    return str(mark.args[0])
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line(
+        "markers",
+        f"{STORAGE_MARK}(name): the test's databases (db_dsn, conn, tx, storage_template_db) store model 1 in "
+        f"{' or '.join(STORAGES)} whatever TGSIS_TEST_STORAGE says (a template of that storage, built at first use)",
+    )
+
+
+def _install_template(conn: psycopg.Connection[Any], method: Literal["extension", "sql"], storage: str) -> str:
+    """Install tgsis into a template database with model 1 stored in ``storage``; the route taken."""
+    result = install(conn, method=method)
+    if storage == "chunks":
+        # the storage switch of issue 40 (sql/chunks/store_in_chunks.sql): every table registered for chunks
+        # is stored in chunks in every database cloned from the template
+        with conn.transaction():
+            conn.execute(
+                "SELECT tgsis.store_in_chunks(tablename) FROM tgsis.model_tables"
+                " WHERE chunkcolumn IS NOT NULL ORDER BY model, iudorder, tablename"
+            )
+    return result.method
+
+
+@pytest.fixture(scope="session")
+def storage_templates(pg: TestServer) -> Iterator[Callable[[str], str]]:
+    """Factory ``storage_templates(storage) -> name`` of a template database with tgsis installed.
+
+    Model 1 is stored in ``storage`` (``"rows"`` or ``"chunks"``); each is
+    built at its first use, once per session. Installed with ``CREATE
+    EXTENSION`` when the server has the files, else with the plain SQL.
+    """
+    built: dict[str, str] = {}
+    with contextlib.ExitStack() as stack:
+
+        def get(storage: str) -> str:
+            if storage not in STORAGES:
+                raise ValueError(f"no storage {storage!r}: use one of {', '.join(STORAGES)}")
+            if storage not in built:
+                name, dsn = stack.enter_context(pg.database(f"tgsis_tpl_{storage}"))
+                with psycopg.connect(dsn) as conn:
+                    method = _install_template(conn, "extension" if pg.extension_files is None else "sql", storage)
+                _SESSION.setdefault("template_method", method)
+                _SESSION.setdefault("storages", []).append(storage)
+                built[storage] = name
+            return built[storage]
+
+        yield get
+
+
+@pytest.fixture(scope="session")
+def template_db(storage_templates: Callable[[str], str]) -> str:
+    """Name of a database with tgsis installed, model 1 in :func:`default_storage` (cloned by :func:`db_dsn`).
+
+    A test marked ``storage`` takes :func:`storage_template_db` instead (``db_dsn``
+    does): this one is the default storage's whatever the mark says.
+    """
+    return storage_templates(default_storage())
+
+
+@pytest.fixture
+def db_storage(request: pytest.FixtureRequest) -> str:
+    """The storage of model 1 in the test's databases: its mark ``storage``, else :func:`default_storage`."""
+    return storage_of(request.node)
+
+
+@pytest.fixture
+def storage_template_db(db_storage: str, storage_templates: Callable[[str], str]) -> str:
+    """Name of the template database of the test's storage (:func:`db_storage`), for ``make_database``."""
+    return storage_templates(db_storage)
 
 
 @pytest.fixture
@@ -310,9 +412,9 @@ def make_database(pg: TestServer) -> Iterator[Callable[..., str]]:
 
 
 @pytest.fixture
-def db_dsn(make_database: Callable[..., str], template_db: str) -> str:
-    """DSN of a fresh database with tgsis installed, dropped after the test."""
-    return make_database(template_db)
+def db_dsn(make_database: Callable[..., str], storage_template_db: str) -> str:
+    """DSN of a fresh database with tgsis installed (the test's storage), dropped after the test."""
+    return make_database(storage_template_db)
 
 
 @pytest.fixture
@@ -323,21 +425,35 @@ def conn(db_dsn: str) -> Iterator[psycopg.Connection[Any]]:
 
 
 @pytest.fixture(scope="session")
-def shared_db_dsn(pg: TestServer, template_db: str) -> Iterator[str]:
-    """DSN of one database with tgsis installed, shared by the tests that use :func:`tx`."""
-    with pg.database("tgsis_shared", template_db) as (_, dsn):
-        yield dsn
+def shared_databases(pg: TestServer, storage_templates: Callable[[str], str]) -> Iterator[Callable[[str], str]]:
+    """Factory ``shared_databases(storage) -> dsn``: one database per storage shared by the tests of :func:`tx`."""
+    made: dict[str, str] = {}
+    with contextlib.ExitStack() as stack:
+
+        def get(storage: str) -> str:
+            if storage not in made:
+                made[storage] = stack.enter_context(pg.database("tgsis_shared", storage_templates(storage)))[1]
+            return made[storage]
+
+        yield get
+
+
+@pytest.fixture(scope="session")
+def shared_db_dsn(shared_databases: Callable[[str], str]) -> str:
+    """DSN of one database with tgsis installed (the default storage), shared by the tests that use :func:`tx`."""
+    return shared_databases(default_storage())
 
 
 @pytest.fixture
-def tx(shared_db_dsn: str) -> Iterator[psycopg.Connection[Any]]:
+def tx(db_storage: str, shared_databases: Callable[[str], str]) -> Iterator[psycopg.Connection[Any]]:
     """Connection inside a transaction that is rolled back after the test (cheaper than :func:`conn`).
 
-    The test must not commit (psycopg refuses ``commit()`` inside the
-    transaction block); tests that commit, or that need several connections
-    to see each other's data, use :func:`conn` / :func:`db_dsn`.
+    The shared database of the test's storage (:func:`db_storage`). The test
+    must not commit (psycopg refuses ``commit()`` inside the transaction
+    block); tests that commit, or that need several connections to see each
+    other's data, use :func:`conn` / :func:`db_dsn`.
     """
-    with psycopg.connect(shared_db_dsn) as connection:
+    with psycopg.connect(shared_databases(db_storage)) as connection:
         with connection.transaction(force_rollback=True):
             yield connection
 
@@ -350,6 +466,8 @@ def pytest_terminal_summary(terminalreporter: Any) -> None:
     terminalreporter.write_sep("-", "tgsis test database")
     terminalreporter.write_line(f"server: PostgreSQL {server.server_version}: {server.description}")
     terminalreporter.write_line(
-        f"template installed with: {_SESSION.get('template_method', 'not used')}; CREATE EXTENSION tgsis: "
+        f"template installed with: {_SESSION.get('template_method', 'not used')}"
+        f" (model 1 in: {', '.join(_SESSION.get('storages', [])) or 'no template made'}; default storage: "
+        f"{default_storage()}); CREATE EXTENSION tgsis: "
         + ("available" if server.extension_files is None else f"NOT available ({server.extension_files})")
     )
