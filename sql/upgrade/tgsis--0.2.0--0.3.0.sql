@@ -361,6 +361,7 @@ DECLARE
     v_members   text[];
     v_object    record;
     v_table     text;
+    v_message   text;
     v_detail    text;
 BEGIN
     IF tgsis.chosen_storage() <> 'chunks' THEN  -- (TG001 for a bad value: the upgrade stops, naming it)
@@ -375,9 +376,10 @@ BEGIN
         BEGIN
             PERFORM tgsis.store_in_chunks(v_table);
         EXCEPTION WHEN SQLSTATE 'TG100' OR dependent_objects_still_exist THEN
-            GET STACKED DIAGNOSTICS v_detail = MESSAGE_TEXT;
-            RAISE WARNING 'tgsis.% stays stored as rows: %', quote_ident(v_table), v_detail
-                USING DETAIL = 'The upgrade stores model 1 in chunks (docs/storage.md); this table could not be switched, nothing of it changed.',
+            GET STACKED DIAGNOSTICS v_message = MESSAGE_TEXT, v_detail = PG_EXCEPTION_DETAIL;
+            RAISE WARNING 'tgsis.% stays stored as rows: %', quote_ident(v_table), v_message
+                USING DETAIL = concat_ws(' ', nullif(v_detail, ''),
+                                         'The upgrade stores model 1 in chunks (docs/storage.md); this table could not be switched, nothing of it changed.'),
                       HINT = format('in psql, as tgsis''s owner, once the cause is gone (a view of yours dropped, the partitioning undone): SELECT tgsis.store_in_chunks(%L)', v_table);
         END;
     END LOOP;
