@@ -643,7 +643,10 @@ def test_a_table_that_cannot_switch_stays_rows_with_a_warning_and_the_upgrade_go
         assert _chunked(conn) == {"vrtx": True, "point": False, "segment": False, "tetra": True, "trgl": True}
         assert len(warnings) == 2, warnings
         point, segment = sorted(warnings)
-        assert point.startswith("tgsis.point stays stored as rows: cannot drop") and "view public.my_wells depends on" in point
+        assert (
+            point.startswith("tgsis.point stays stored as rows: cannot drop")
+            and "view public.my_wells depends on" in point
+        )
         assert "SELECT tgsis.store_in_chunks('point')" in point
         assert segment.startswith("tgsis.segment stays stored as rows: ") and "partitioned" in segment
         assert "SELECT tgsis.store_in_chunks('segment')" in segment
