@@ -29,6 +29,9 @@ from tgsis.mesh import Surface
 
 Conn = psycopg.Connection[Any]
 
+# the chunk foundation: builds chunk tables beside the row tables, or switches them (docs/testing.md, the mark storage)
+pytestmark = pytest.mark.storage("rows")
+
 MODEL1 = MODEL1_COLUMNS
 VISIBLE = "(c.revision = ANY (tgsis.get_revisions(true))) IS TRUE AND NOT (c.lastrevs && tgsis.get_revisions(true))"
 

@@ -27,6 +27,9 @@ from tgsis.mesh import Surface
 
 Conn = psycopg.Connection[Any]
 
+# the chunk foundation: builds chunk tables beside the row tables, or switches them (docs/testing.md, the mark storage)
+pytestmark = pytest.mark.storage("rows")
+
 REFS = {"vrtx": [], "point": ["vrtxid1"], "segment": ["vrtxid1", "vrtxid2"], "trgl": ["vrtxid1", "vrtxid2", "vrtxid3"]}
 IDS = {"vrtx": "vrtxid", "point": "pointid", "segment": "segid", "trgl": "trglid"}
 

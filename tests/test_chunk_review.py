@@ -20,6 +20,9 @@ from tgsis.errors import InvalidInputError
 
 Conn = psycopg.Connection[Any]
 
+# the chunk foundation: builds chunk tables beside the row tables, or switches them (docs/testing.md, the mark storage)
+pytestmark = pytest.mark.storage("rows")
+
 TRGL = ChunkColumns(("vrtxid1", "vrtxid2", "vrtxid3"), refs=("vrtxid1", "vrtxid2", "vrtxid3"))
 XYZ = ChunkColumns(("x", "y", "z"))
 INT4_MAX = 2**31 - 1

@@ -22,6 +22,9 @@ from tgsis.mesh import Surface
 
 Conn = psycopg.Connection[Any]
 
+# the chunk foundation: builds chunk tables beside the row tables, or switches them (docs/testing.md, the mark storage)
+pytestmark = pytest.mark.storage("rows")
+
 
 def _sqlstate(conn: Conn, statement: str, params: Any = ()) -> str | None:
     try:

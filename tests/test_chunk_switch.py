@@ -22,6 +22,9 @@ from tgsis.testing import TestServer
 
 Conn = psycopg.Connection[Any]
 
+# the chunk foundation: builds chunk tables beside the row tables, or switches them (docs/testing.md, the mark storage)
+pytestmark = pytest.mark.storage("rows")
+
 MODEL1 = MODEL1_COLUMNS
 
 

@@ -27,6 +27,9 @@ from tgsis.mesh import Surface
 
 Conn = psycopg.Connection[Any]
 
+# the chunk foundation: builds chunk tables beside the row tables, or switches them (docs/testing.md, the mark storage)
+pytestmark = pytest.mark.storage("rows")
+
 MODEL1 = {
     "vrtx": ("vrtxid", []),
     "point": ("pointid", ["vrtxid1"]),

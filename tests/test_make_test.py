@@ -285,7 +285,7 @@ def _fake_venv(folder: Path, record: Path, fail_when: str = "") -> None:
     (folder / "bin").mkdir(parents=True)
     _script(
         folder / "bin" / "python",
-        f'echo "$TGSIS_PG|$PWD|$*|$(ls -A .. | tr "\\n" " ")" >> {shlex.quote(str(record))}\n'
+        f'echo "$TGSIS_PG|$PWD|$*|$(ls -A .. | tr "\\n" " ")|$TGSIS_TEST_STORAGE" >> {shlex.quote(str(record))}\n'
         f'[ "$TGSIS_PG" = {shlex.quote(fail_when) or "__never__"} ] && exit 3\nexit 0\n',
     )
 
@@ -323,8 +323,10 @@ def _run_suites(
 def test_the_suites_run_on_both_servers_the_embedded_one_in_a_copy_alone(tmp_path: Path) -> None:
     status, out, runs = _run_suites(tmp_path)
     assert status == 0, out
-    by_server = {server: (folder, args) for server, folder, args, _ in runs}
-    beside = {server: set(listing.split()) for server, _, _, listing in runs}
+    by_server = {server: (folder, args) for server, folder, args, _, _ in runs}
+    beside = {server: set(listing.split()) for server, _, _, listing, _ in runs}
+    # both storages of model 1 stay tested: PostgreSQL 15 on chunks (the default), 18 on rows
+    assert {server: storage for server, _, _, _, storage in runs} == {"system": "chunks", "embedded": "rows"}
     assert set(by_server) == {"system", "embedded"}
     assert by_server["system"] == (str(ROOT), "-m pytest -p no:cacheprovider --durations=15 -k x y")
     copy = Path(by_server["embedded"][0])

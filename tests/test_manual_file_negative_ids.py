@@ -6,6 +6,10 @@ back, a negative ``vrtxid`` that is a stored id is that vertex (a negative
 that is no stored id, or NaN, marks a vertex added in the tool): else the
 region's vertices would come back under fresh ids and every cell on them as
 a new cell — ids that change for unchanged rows, without a word.
+
+Negative vertex ids cannot be stored in chunks (docs/storage.md, "What differs from rows"): these tests run
+on rows (``@pytest.mark.storage("rows")``); on chunks, the psql user's UPDATE is refused by name, nothing
+changed (the last test).
 """
 
 from __future__ import annotations
@@ -15,6 +19,7 @@ from typing import Any
 
 import numpy as np
 import psycopg
+import pytest
 
 import tgsis
 from tests.merge_data import SIDE, curved_surface
@@ -24,6 +29,8 @@ from tgsis.db import regions as R
 from tgsis.merge3 import apply_solutions
 
 Conn = psycopg.Connection[Any]
+
+pytestmark = pytest.mark.storage("rows")  # negative vertex ids: rows only
 
 PATCH = np.array([5 * SIDE + 5, 5 * SIDE + 6, 6 * SIDE + 5, 6 * SIDE + 6])  # stored as -1 - id
 
@@ -139,3 +146,29 @@ def test_integer_ids_past_float64_precision_are_read_as_they_are(conn: Conn, tmp
     conn.commit()
     merge, state = merged_state(conn, geoid)
     assert np.array_equal(state.vertex_ids, merge.child.vertex_ids)
+
+
+@pytest.mark.storage("chunks")
+def test_on_chunks_the_psql_users_update_to_negative_ids_is_refused_by_name(conn: Conn) -> None:
+    """What negative_fault does, on chunks: each UPDATE refused by name (TG100), the stored rows as they were."""
+    F.create_feature_class(conn, "faults", "SURFACE")
+    tgsis.enable_feature_versioning(conn)
+    geoid = F.insert_feature(conn, "faults", curved_surface(), drop_extra_properties=True)
+    conn.commit()
+    read = {
+        "vrtx": "SELECT vrtxid, float8send(x), float8send(y), float8send(z) FROM tgsis.vrtx WHERE geoid = %s ORDER BY 1",
+        "trgl": "SELECT trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.trgl WHERE geoid = %s ORDER BY 1",
+        "chunk versions": "SELECT count(*), max(revision) FROM tgsis.vrtx_chunk WHERE geoid = %s",
+    }
+    before = {name: conn.execute(q, (geoid,)).fetchall() for name, q in read.items()}
+    for update in (
+        "UPDATE tgsis.vrtx SET vrtxid = -1 - vrtxid WHERE geoid = %s",
+        "UPDATE tgsis.trgl SET vrtxid1 = -1 - vrtxid1, vrtxid2 = -1 - vrtxid2, vrtxid3 = -1 - vrtxid3 WHERE geoid = %s",
+        "UPDATE tgsis.vrtx SET vrtxid = -5 WHERE geoid = %s AND vrtxid = 0",
+    ):
+        with pytest.raises(psycopg.Error) as info:
+            conn.execute(update, (geoid,))
+        assert info.value.sqlstate == "TG100", (update, info.value)
+        assert "negative" in str(info.value.diag.message_primary), (update, info.value.diag.message_primary)
+        conn.rollback()
+        assert {name: conn.execute(q, (geoid,)).fetchall() for name, q in read.items()} == before

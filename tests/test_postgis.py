@@ -38,6 +38,7 @@ from tgsis.db.local import LocalServer, find_binaries
 from tgsis.db.sqlsource import ExtensionSources
 from tgsis.errors import reraise
 from tgsis.postgis import mesh_from_wkb, mesh_to_ewkb
+from tgsis.testing import default_storage
 
 Conn = psycopg.Connection[Any]
 
@@ -51,7 +52,7 @@ class GisServer:
         self.template = "gis_template"
         server.ensure_database(self.template)
         with psycopg.connect(server.dsn(self.template)) as conn:  # tgsis first, PostGIS after it
-            tgsis.install(conn, method="sql")
+            tgsis.install(conn, method="sql", storage=default_storage())  # TGSIS_TEST_STORAGE's (docs/testing.md)
             conn.execute("CREATE EXTENSION postgis")
         with psycopg.connect(server.dsn("postgres"), autocommit=True) as conn:
             conn.execute(sql.SQL("ALTER DATABASE {} IS_TEMPLATE true").format(sql.Identifier(self.template)))
@@ -835,7 +836,7 @@ def test_a_dump_without_postgis_restores_where_there_is_none(gis: GisServer, tmp
 
 
 def _store_in_chunks(conn: Conn) -> None:
-    """The storage switch of model 1 (this module installs tgsis itself: TGSIS_TEST_STORAGE does not reach it)."""
+    """The storage switch of model 1, where the template stores rows (TGSIS_TEST_STORAGE=rows) or after versioning."""
     conn.execute(
         "SELECT tgsis.store_in_chunks(tablename) FROM tgsis.model_tables"
         " WHERE chunkcolumn IS NOT NULL AND NOT tgsis.stored_in_chunks(tablename) ORDER BY model, iudorder, tablename"

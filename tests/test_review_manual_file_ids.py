@@ -3,6 +3,8 @@
 A file vertex's ``vrtxid`` is a stored id, or marks a new vertex (NaN, a negative that is no stored id),
 which gets an id above every state's. A whole non-negative ``vrtxid`` that is no stored id is taken as
 given. These cases must never give two vertices one id, nor read an id as another.
+
+Negative vertex ids are stored on rows only (tests/test_manual_file_negative_ids.py): these tests run on rows.
 """
 
 from __future__ import annotations
@@ -18,6 +20,8 @@ import tgsis
 from tests.test_manual_file_negative_ids import PATCH, exported_conflict, merged_state, move_patch, negative_fault
 
 Conn = psycopg.Connection[Any]
+
+pytestmark = pytest.mark.storage("rows")  # negative vertex ids: rows only
 
 
 def _edited_with_two_new_vertices(conn: Conn, tmp_path: Path, marks: tuple[float, float]) -> tuple[int, int, Any]:

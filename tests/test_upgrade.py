@@ -509,3 +509,153 @@ def test_a_users_view_over_the_old_period_type_stops_the_upgrade_and_survives(
         assert conn.execute("SELECT tgsis.version()").fetchone() == (OLD,)
         assert conn.execute("SELECT to_regclass('public.my_periods') IS NOT NULL").fetchone() == (True,)
         assert _objects(conn) == before
+
+
+# ------------------------------------------------------------------ issue 40: the upgrade stores model 1 in chunks
+
+_CHUNKED = ("vrtx", "point", "segment", "tetra", "trgl")  # model 1's tables registered for chunks
+
+# more history than _USE: a third version from survey2 with its own saved change, a point set and a vertex deleted
+_MORE = """
+SELECT tgsis.create_version('survey3', 'survey2', 'the third survey');
+SELECT tgsis.goto_version('survey3', true);
+WITH g AS (SELECT tgsis.new_geometry('MULTIPOINT', 'wells', ARRAY[0, 0, 0, 1, 1, 0]::float8[], 3, 1) AS geoid),
+     v AS (INSERT INTO tgsis.vrtx SELECT geoid, i, 10 + i, 20 + i, 30 + i FROM g, generate_series(0, 1) i)
+INSERT INTO tgsis.point SELECT geoid, i, i FROM g, generate_series(0, 1) i;
+UPDATE tgsis.vrtx SET x = 0.5, y = -0.0 WHERE vrtxid = 1 AND z = 0;
+SELECT tgsis.save_revision('survey3');
+SELECT tgsis.goto_version('DEFAULT', true);
+"""
+
+
+def _every_set(conn: psycopg.Connection[Any]) -> dict[str, list[tuple[Any, ...]]]:
+    """What each version and each revision sees of model 1's tables (rows, doubles as their text bits)."""
+    reads = {
+        "vrtx": "SELECT geoid, vrtxid, float8send(x), float8send(y), float8send(z) FROM tgsis.vrtx ORDER BY 1, 2",
+        "point": "SELECT geoid, pointid, vrtxid1 FROM tgsis.point ORDER BY 1, 2",
+        "trgl": "SELECT geoid, trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.trgl ORDER BY 1, 2",
+    }
+    seen: dict[str, list[tuple[Any, ...]]] = {}
+    for (name,) in conn.execute("SELECT name FROM tgsis.versions ORDER BY versionid").fetchall():
+        conn.execute("SELECT tgsis.goto_version(%s, true)", (name,))
+        seen.update({f"{name} {t}": conn.execute(q).fetchall() for t, q in reads.items()})
+    for revision, name in conn.execute(
+        "SELECT r.revision, v.name FROM tgsis.revisions r JOIN tgsis.versions v USING (versionid)"
+        " WHERE r.saved_at IS NOT NULL ORDER BY 1"
+    ).fetchall():
+        conn.execute("SELECT tgsis.goto_version(%s, true)", (name,))
+        conn.execute("SELECT set_config('tgsis.revision', %s, false)", (str(revision),))
+        seen.update({f"revision {revision} {t}": conn.execute(q).fetchall() for t, q in reads.items()})
+        conn.execute("RESET tgsis.revision")
+    conn.execute("SELECT tgsis.goto_version('DEFAULT', true)")
+    return seen
+
+
+def _chunked(conn: psycopg.Connection[Any]) -> dict[str, bool]:
+    return {t: conn.execute("SELECT tgsis.stored_in_chunks(%s)", (t,)).fetchone() == (True,) for t in _CHUNKED}
+
+
+def _upgrade_now(conn: psycopg.Connection[Any], method: str, storage: str | None = None) -> list[str]:
+    """Upgrade as a DBA would (ALTER EXTENSION in psql, or tgsis.install); the WARNINGs it gave."""
+    warnings: list[str] = []
+    conn.add_notice_handler(
+        lambda d: (
+            warnings.append(f"{d.message_primary} | {d.message_detail} | {d.message_hint}")
+            if d.severity_nonlocalized == "WARNING"
+            else None
+        )
+    )
+    if method == "extension":
+        if storage is not None:
+            conn.execute("SELECT set_config('tgsis.storage', %s, false)", (storage,))
+        conn.execute("ALTER EXTENSION tgsis UPDATE")
+    else:
+        assert tgsis.install(conn, storage=storage or "chunks").action == "upgraded"  # type: ignore[arg-type]
+    conn.commit()
+    return warnings
+
+
+@pytest.mark.parametrize("method", ["extension", "sql"])
+def test_the_upgrade_stores_model_1_in_chunks_and_every_version_and_revision_sees_the_same(
+    method: str, pg: TestServer, make_database: MakeDb, tmp_path: Path
+) -> None:
+    dsn = _old_database(method, pg, make_database, tmp_path)
+    with psycopg.connect(dsn) as conn:
+        conn.execute(_MORE)
+        conn.commit()
+        before = _every_set(conn)
+        conn.commit()
+        assert before["survey3 point"] and before["survey3 vrtx"] != before["survey2 vrtx"] != before["DEFAULT vrtx"]
+        assert len([k for k in before if k.startswith("revision")]) >= 6, "saved revisions are compared too"
+        assert _upgrade_now(conn, method) == []
+        assert _chunked(conn) == dict.fromkeys(_CHUNKED, True)
+        assert conn.execute("SELECT to_regclass('tgsis.vrtx_ver'), to_regclass('tgsis.trgl_ver')").fetchone() == (
+            None,
+            None,
+        )
+        assert _every_set(conn) == before
+        # and it goes on working: a change saved in survey3, DEFAULT unchanged
+        conn.execute("SELECT tgsis.goto_version('survey3', true)")
+        conn.execute("UPDATE tgsis.vrtx SET z = 7 WHERE vrtxid = 0 AND x = 10")
+        conn.execute("SELECT tgsis.save_revision('survey3 after the upgrade')")
+        conn.execute("SELECT tgsis.goto_version('DEFAULT', true)")
+        conn.commit()
+        after = _every_set(conn)
+        assert after["DEFAULT vrtx"] == before["DEFAULT vrtx"] and after["survey3 vrtx"] != before["survey3 vrtx"]
+
+
+@pytest.mark.parametrize("method", ["extension", "sql"])
+def test_the_upgrade_with_storage_rows_keeps_rows(
+    method: str, pg: TestServer, make_database: MakeDb, tmp_path: Path
+) -> None:
+    dsn = _old_database(method, pg, make_database, tmp_path)
+    with psycopg.connect(dsn) as conn:
+        before = _every_set(conn)
+        conn.commit()
+        assert _upgrade_now(conn, method, storage="rows") == []
+        assert _chunked(conn) == dict.fromkeys(_CHUNKED, False)
+        assert conn.execute("SELECT to_regclass('tgsis.vrtx_ver') IS NOT NULL").fetchone() == (True,)
+        assert _every_set(conn) == before
+
+
+@pytest.mark.parametrize("method", ["extension", "sql"])
+def test_a_table_that_cannot_switch_stays_rows_with_a_warning_and_the_upgrade_goes_on(
+    method: str, pg: TestServer, make_database: MakeDb, tmp_path: Path
+) -> None:
+    """A user's view over tgsis.point (PostgreSQL would have to drop it) and a tgsis.segment partitioned by hand:
+    both stay rows, each named in a WARNING with why and how to switch later; the others are switched."""
+    dsn = _old_database(method, pg, make_database, tmp_path)
+    with psycopg.connect(dsn) as conn:
+        conn.execute(_MORE)
+        conn.execute("CREATE VIEW public.my_wells AS SELECT geoid, pointid FROM tgsis.point")
+        # (enable_feature_versioning made tgsis.segment a view of segment_ver: its storage is partitioned here)
+        storage = conn.execute("SELECT to_regclass('tgsis.segment_ver') IS NOT NULL").fetchone()
+        assert storage == (True,)
+        conn.execute(
+            "ALTER TABLE tgsis.segment_ver RENAME TO segment_ver_plain;"
+            "CREATE TABLE tgsis.segment_ver (LIKE tgsis.segment_ver_plain INCLUDING ALL) PARTITION BY HASH (geoid);"
+            "CREATE TABLE tgsis.segment_ver_p0 PARTITION OF tgsis.segment_ver FOR VALUES WITH (MODULUS 1, REMAINDER 0);"
+        )
+        conn.commit()
+        before = _every_set(conn)
+        conn.commit()
+        warnings = _upgrade_now(conn, method)
+        assert _chunked(conn) == {"vrtx": True, "point": False, "segment": False, "tetra": True, "trgl": True}
+        assert len(warnings) == 2, warnings
+        point, segment = sorted(warnings)
+        assert (
+            point.startswith("tgsis.point stays stored as rows: cannot drop")
+            and "view public.my_wells depends on" in point
+        )
+        assert "SELECT tgsis.store_in_chunks('point')" in point
+        assert segment.startswith("tgsis.segment stays stored as rows: ") and "partitioned" in segment
+        assert "SELECT tgsis.store_in_chunks('segment')" in segment
+        assert _every_set(conn) == before
+        conn.execute("SELECT tgsis.goto_version('survey3', true)")
+        assert conn.execute("SELECT count(*) FROM public.my_wells").fetchone() == (2,), "the user's view works on"
+        conn.execute("SELECT tgsis.goto_version('DEFAULT', true)")
+        # once the view is gone, the switch named in the hint works
+        conn.execute("DROP VIEW public.my_wells")
+        conn.execute("SELECT tgsis.store_in_chunks('point')")
+        conn.commit()
+        assert _chunked(conn)["point"] and _every_set(conn) == before

@@ -71,12 +71,15 @@ def _store_release(conn: psycopg.Connection[Any], faults: Sequence[CfmFault], re
     }
 
 
-def _stored_rows(conn: psycopg.Connection[Any]) -> int:
-    row = conn.execute(
-        "SELECT (SELECT count(*) FROM tgsis.vrtx_ver) + (SELECT count(*) FROM tgsis.trgl_ver)"
-    ).fetchone()
-    assert row is not None
-    return int(row[0])
+def _stored_rows(conn: psycopg.Connection[Any]) -> tuple[int, str]:
+    """The stored versions of the vertices and triangles (their storage: rows, or chunk versions), and what they are."""
+    count = 0
+    for table in ("vrtx", "trgl"):
+        row = conn.execute(f"SELECT count(*) FROM {V.storage_table(conn, 'tgsis', table)}").fetchone()
+        assert row is not None
+        count += int(row[0])
+    chunked = conn.execute("SELECT tgsis.stored_in_chunks('vrtx')").fetchone() == (True,)
+    return count, "chunk versions" if chunked else "rows"
 
 
 def _releases_seen(conn: psycopg.Connection[Any]) -> dict[str, str]:
@@ -290,10 +293,11 @@ def run_demo(
             saved = V.save_revision(conn, "release-6.1")
             seen_in_version = _releases_seen(conn)
             meshes_in_version = _meshes_seen(conn)
+        stored = _stored_rows(conn)
         out(
             f"3. version cfm6.1: release 6.1 checked in over {len(new)} fault(s) by difference "
             f"(vertices within {TOLERANCE * 100:.0f} cm are the same), saved as revision {saved}; "
-            f"rows stored for it: {_stored_rows(conn) - rows_before}"
+            f"{stored[1]} stored for it: {stored[0] - rows_before[0]}"
         )
         for line in report:
             out(line)

@@ -189,14 +189,17 @@ def run(context: Context) -> None:
             ).format(sql.Literal(older[0]), sql.Literal(newer[0])),
         )
         context.figure(f"changed_tables_{newer[0]}", [r[0] for r in rows])
+    # the stored row versions of tgsis.vrtx: tgsis.vrtx_ver on rows, the decoded chunk versions on chunks (the rows
+    # of each chunk version, tgsis.vrtx_chunk_rows); named by tgsis.storage_row_versions, the one place that knows
+    (stored_rows,) = conn.execute("SELECT tgsis.storage_row_versions('tgsis', 'vrtx')").fetchone()  # type: ignore[misc]
     rows = context.ask(
         "how many vertex rows did each version store, against how many it sees?",
         sql.SQL(
-            "SELECT v.name AS version, (SELECT count(*) FROM tgsis.vrtx_ver r JOIN tgsis.revisions rv USING (revision) "
+            "SELECT v.name AS version, (SELECT count(*) FROM {} r JOIN tgsis.revisions rv USING (revision) "
             "WHERE rv.versionid = v.versionid) AS stored, "
             "(SELECT count(*) FROM tgsis.rows_at(NULL::tgsis.vrtx, v.name)) AS seen "
             "FROM tgsis.versions v WHERE v.valid_from IS NOT NULL ORDER BY v.valid_from"
-        ),
+        ).format(sql.SQL(stored_rows)),
     )
     stored, seen = [int(r[1]) for r in rows], [int(r[2]) for r in rows]
     out(
