@@ -63,6 +63,7 @@ def test_feature_storage_has_the_revision_indexes(conn: Conn) -> None:
     tgsis.enable_feature_versioning(conn)
     conn.commit()
     properties = tgsis.get_feature_class(conn, "faults").property_table("VERTEX")
+    assert properties is not None
     # the storage of each: <t>_ver, or a model table's chunk table (its chunk versions carry revision, revclosed)
     for schema, table in (("tgsis", "vrtx"), ("tgsis", "trgl"), ("tgsis", "geometry"), ("public", properties)):
         storage = storage_of(conn, table, schema)
