@@ -36,3 +36,12 @@ def stored_versions(conn: Conn, table: str, schema: str = "tgsis") -> list[tuple
     write must leave alone, on either storage."""
     storage = storage_of(conn, table, schema)
     return conn.execute(f"SELECT * FROM {storage} AS s ORDER BY s::text").fetchall()
+
+
+def row_versions(conn: Conn, table: str, schema: str = "tgsis") -> str:
+    """A relation of the stored row versions of ``table``, one row each with the row table's columns and revision,
+    lastrevs, revclosed: ``<t>_ver``, or in chunks each chunk version's rows decoded
+    (``tgsis.storage_row_versions``, a parenthesized subquery or a relation name: alias it)."""
+    row = conn.execute("SELECT tgsis.storage_row_versions(%s, %s)", (schema, table)).fetchone()
+    assert row is not None
+    return str(row[0])
