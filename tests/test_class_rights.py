@@ -26,6 +26,7 @@ from psycopg.conninfo import make_conninfo
 import tgsis
 from tests.gmaps_shapes import icosahedron
 from tests.roles import Roles, login_roles
+from tests.storage_data import in_chunks
 from tests.synthetic import flat_grid
 from tests.temporal_data import evolving, series
 from tgsis import gmaps
@@ -203,12 +204,15 @@ def test_reading_without_writing_is_refused_at_the_write(world: World) -> None:
     before = _rows(world.su, world.beta)
     assert _count(editor, "vrtx", world.beta) == 25
     versioned = world.su.execute("SELECT count(*) > 0 FROM tgsis.versioned_tables").fetchone() == (True,)
+    # a versioned view's trigger, or the face over chunks (versioned or not: docs/storage.md, "What differs from
+    # rows"), refuses by name; on a plain table, row-level security skips the rows silently
+    by_name = versioned or in_chunks(world.su)
     for statement in (
         "UPDATE tgsis.vrtx SET z = z + 100 WHERE geoid = %s",
         "UPDATE tgsis.vrtx SET z = z + 100 WHERE geoid = %s AND vrtxid = 0",
         "DELETE FROM tgsis.trgl WHERE geoid = %s",
     ):
-        if versioned:  # the view's trigger refuses, naming the class
+        if by_name:  # the view's or the face's trigger refuses, naming the class
             with pytest.raises(psycopg.errors.InsufficientPrivilege, match="beta"):
                 editor.execute(statement, (world.beta,))
             editor.rollback()
@@ -385,19 +389,42 @@ def test_pg_dump_and_restore_keep_the_class_rights(world: World, pg: Any, db_dsn
 
 
 def test_every_model_table_and_partitioned_storage_carry_the_policies(conn: Conn) -> None:
-    """Every model table with rows per geoid (the registry's), also after partition_model_storage swaps them."""
+    """Every model table with rows per geoid (the registry's), also after partition_model_storage swaps them: the
+    table itself, or for a table stored in chunks its chunk table, under the class policies, and its face a
+    security_barrier view filtering by the class rights (docs/storage.md, "The relational face over chunks")."""
 
     def protected() -> dict[str, int]:
         return {
             r[0]: r[1]
             for r in conn.execute(
-                "SELECT c.relname, count(p.polname) FILTER (WHERE p.polname LIKE 'tgsis_class_%%') "
-                "  FROM tgsis.model_tables t JOIN pg_class c ON c.relname = t.tablename "
+                "SELECT t.tablename, count(p.polname) FILTER (WHERE p.polname LIKE 'tgsis_class_%%') "
+                "  FROM tgsis.model_tables t JOIN pg_class c"
+                "    ON c.relname = t.tablename || CASE WHEN tgsis.stored_in_chunks(t.tablename) THEN '_chunk' ELSE '' END"
                 "   AND c.relnamespace = 'tgsis'::regnamespace AND c.relrowsecurity "
                 "  LEFT JOIN pg_policy p ON p.polrelid = c.oid "
-                " WHERE t.geoidcolumn IS NOT NULL GROUP BY c.relname"
+                " WHERE t.geoidcolumn IS NOT NULL GROUP BY t.tablename"
             ).fetchall()
         }
+
+    def faces() -> list[str]:  # the faces over chunks: security_barrier views with the class rights' filter
+        return [
+            r[0]
+            for r in conn.execute(
+                "SELECT t.tablename FROM tgsis.model_tables t"
+                "  JOIN pg_class c ON c.relname = t.tablename AND c.relnamespace = 'tgsis'::regnamespace"
+                " WHERE tgsis.stored_in_chunks(t.tablename) AND c.relkind = 'v'"
+                "   AND 'security_barrier=true' = ANY (c.reloptions)"
+                "   AND pg_get_viewdef(c.oid) LIKE '%%class_denied_geoids%%' ORDER BY 1"
+            ).fetchall()
+        ]
+
+    chunked = [
+        r[0]
+        for r in conn.execute(
+            "SELECT tablename FROM tgsis.model_tables WHERE tgsis.stored_in_chunks(tablename) ORDER BY 1"
+        ).fetchall()
+    ]
+    assert faces() == chunked
 
     expected = [
         r[0]
@@ -408,6 +435,7 @@ def test_every_model_table_and_partitioned_storage_carry_the_policies(conn: Conn
     assert protected() == {t: 4 for t in expected}
     conn.execute("SELECT tgsis.partition_model_storage(1::smallint, 4)")
     assert protected() == {t: 4 for t in expected}
+    assert faces() == chunked
 
 
 @pytest.mark.parametrize(

@@ -20,6 +20,7 @@ import psycopg
 import pytest
 
 import tgsis
+from tests.storage_data import in_chunks, storage_of
 from tests.test_sql_merge_regions import assert_same_regions
 from tgsis.db import _merge_states, regions
 from tgsis.db import features as F
@@ -62,8 +63,12 @@ def test_feature_storage_has_the_revision_indexes(conn: Conn) -> None:
     tgsis.enable_feature_versioning(conn)
     conn.commit()
     properties = tgsis.get_feature_class(conn, "faults").property_table("VERTEX")
-    for table in ("tgsis.vrtx_ver", "tgsis.trgl_ver", "tgsis.geometry_ver", f"public.{properties}_ver"):
-        assert _has_revision_indexes(conn, table, "_geoid" if table.startswith("public") else "geoid"), table
+    assert properties is not None
+    # the storage of each: <t>_ver, or a model table's chunk table (its chunk versions carry revision, revclosed)
+    for schema, table in (("tgsis", "vrtx"), ("tgsis", "trgl"), ("tgsis", "geometry"), ("public", properties)):
+        storage = storage_of(conn, table, schema)
+        assert storage.endswith("_chunk" if schema == "tgsis" and in_chunks(conn, table) else "_ver"), storage
+        assert _has_revision_indexes(conn, storage, "_geoid" if schema == "public" else "geoid"), storage
 
 
 def test_a_merge_finds_the_rows_it_writes_through_the_revision_indexes(conn: Conn) -> None:
@@ -197,13 +202,17 @@ def test_cell_storage_has_a_brin_on_its_vertex_columns_and_making_it_again_adds_
         tgsis.create_feature_class(conn, name, geotype)
     tgsis.enable_feature_versioning(conn)
     conn.commit()
+    chunked = in_chunks(conn, "trgl")
     for table, k in (("point", 1), ("segment", 2), ("trgl", 3), ("tetra", 4)):
         columns = ", ".join(f"vrtxid{i + 1}" for i in range(k))
-        found = [d for am, d in _indexes(conn, f"tgsis.{table}_ver") if am == "brin" and f"(geoid, {columns})" in d]
-        assert len(found) == 1, _indexes(conn, f"tgsis.{table}_ver")
-        before = _indexes(conn, f"tgsis.{table}_ver")
+        storage = storage_of(conn, table)
+        found = [d for am, d in _indexes(conn, storage) if am == "brin" and f"(geoid, {columns})" in d]
+        # in chunks the vertex ids are inside arrays: no vertex BRIN (tgsis.create_revision_indexes); the cells
+        # on given vertices are read from the object's chunks by the chunk table's key (_reads_the_ring)
+        assert len(found) == (0 if chunked else 1), _indexes(conn, storage)
+        before = _indexes(conn, storage)
         conn.execute("SELECT tgsis.create_revision_indexes('tgsis', %s, 'geoid')", (table,))  # as the upgrade calls it
-        assert _indexes(conn, f"tgsis.{table}_ver") == before
+        assert _indexes(conn, storage) == before
     # the triangles of models 2 and 3 get theirs by instant or topology period (ids repeat in each); the
     # vertices' storage gets none
     for table, columns in (
@@ -212,11 +221,13 @@ def test_cell_storage_has_a_brin_on_its_vertex_columns_and_making_it_again_adds_
     ):
         found = [d for am, d in _indexes(conn, table) if am == "brin" and columns in d]
         assert len(found) == 1, _indexes(conn, table)
-    assert not any("vrtxid1" in d for am, d in _indexes(conn, "tgsis.vrtx_ver") if am == "brin")
+    assert not any("vrtxid1" in d for am, d in _indexes(conn, storage_of(conn, "vrtx")) if am == "brin")
     tgsis.disable_feature_versioning(conn)  # what versioning made goes
     conn.commit()
     for table in ("point", "segment", "trgl", "tetra"):
-        assert not any(am == "brin" for am, _ in _indexes(conn, f"tgsis.{table}")), _indexes(conn, f"tgsis.{table}")
+        # (a chunk table keeps the revision BRIN it was made with, versioned or not: tgsis.create_chunk_table)
+        left = [d for am, d in _indexes(conn, storage_of(conn, table)) if am == "brin" and "(revision)" not in d]
+        assert left == [] and storage_of(conn, table).endswith("_chunk" if chunked else f".{table}"), table
 
 
 def _plans_of(conn: Conn, action: Any) -> list[str]:
@@ -265,10 +276,35 @@ def two_edits(conn: Conn) -> int:
                 (dz, geoid, [int(i) for i in ids.ravel()]),
             )
         conn.commit()
-    conn.autocommit = True
-    conn.execute("VACUUM ANALYZE tgsis.trgl_ver, tgsis.vrtx_ver")
-    conn.autocommit = False
+    _vacuum_model_storage(conn)
     return geoid
+
+
+def _vacuum_model_storage(conn: Conn) -> None:
+    """VACUUM ANALYZE the storage of tgsis.trgl and tgsis.vrtx (rows or chunks), as on a table in use."""
+    storages = f"{storage_of(conn, 'trgl')}, {storage_of(conn, 'vrtx')}"
+    conn.commit()
+    conn.autocommit = True
+    conn.execute(f"VACUUM ANALYZE {storages}")
+    conn.autocommit = False
+
+
+def _cells(conn: Conn) -> str:
+    """How the plans name the triangles' storage read: ``trgl_ver v`` (rows) or ``trgl_chunk`` (chunks)."""
+    return "trgl_chunk" if in_chunks(conn, "trgl") else "trgl_ver v"
+
+
+def _reads_the_ring(conn: Conn, plan: str) -> None:
+    """The cells on the changed vertices: on rows through the vertex BRIN by spans of ids; on chunks (no vertex
+    BRIN: the ids are inside arrays, tgsis.create_revision_indexes) from the object's cell chunks alone, found
+    by the chunk table's key, never a scan of the storage."""
+    if not in_chunks(conn, "trgl"):
+        _reads_the_ring_by_spans(plan)
+        return
+    assert "Seq Scan on trgl_chunk" not in plan, plan
+    assert re.search(r"Index Scan (on|using) trgl_chunk_pkey", plan), plan
+    # the object's key (PostgreSQL 18 adds the revisions to the condition: "((geoid = ...) AND (revision = ...))")
+    assert re.search(r"Index Cond: \(\(?geoid = ", plan), plan
 
 
 def _reads_the_ring_by_spans(plan: str) -> None:
@@ -297,7 +333,7 @@ def test_sql_region_detection_reads_the_cells_on_changed_vertices_by_spans_of_th
     (ring,) = [
         p for p in plans if "INSERT INTO pg_temp.tgsis_mr_margin" in p.split("Query Text:", 1)[-1].split("\n\n")[0]
     ]
-    _reads_the_ring_by_spans(ring)
+    _reads_the_ring(conn, ring)
     assert_same_regions(conn, "e1", two_edits)  # what it finds is merge3's
 
 
@@ -308,9 +344,9 @@ def test_the_python_merge_read_takes_the_cells_on_changed_vertices_by_spans_of_t
     plans = _plans_of(conn, lambda: read.append(_merge_states.read_merge_change(conn, "e1", two_edits)))
     assert read[0] is not None
     # the statement that finds the cells on given vertices (the others find cells by id)
-    on_vertices = [p for p in plans if "trgl_ver v" in p and re.search(r'vrtxid2"?( \+ 0\))? = ANY', p)]
+    on_vertices = [p for p in plans if _cells(conn) in p and re.search(r'vrtxid2"?( \+ 0\))? = ANY', p)]
     assert len(on_vertices) == 1, plans
-    _reads_the_ring_by_spans(on_vertices[0])
+    _reads_the_ring(conn, on_vertices[0])
 
 
 def test_scattered_edits_found_through_the_vertex_brin_give_merge3s_regions_in_sql_and_in_python(
@@ -386,14 +422,23 @@ def test_the_spans_of_ids_at_both_ends_of_bigint_are_cut_without_overflow(conn: 
     assert _merge_states._id_spans(np.asarray(ids, dtype=np.int64)) == spans
 
 
-def test_new_vertices_at_both_ends_of_bigint_give_merge3s_regions_in_sql(conn: Conn) -> None:
-    """A side adds a vertex (and a triangle on it) with an id near -2^63, the other one near 2^63: the SQL
-    detection (its one-ring through the vertex BRIN) finds merge3's regions, as it did before the spans."""
+@pytest.mark.parametrize(
+    "low",
+    [
+        # negative vertex ids cannot be stored in chunks, by design (docs/storage.md, "What differs from rows")
+        pytest.param(-(2**63) + 5, marks=pytest.mark.storage("rows"), id="near-minus-2^63"),
+        pytest.param(10**6, id="positive"),
+    ],
+)
+def test_new_vertices_at_both_ends_of_bigint_give_merge3s_regions_in_sql(conn: Conn, low: int) -> None:
+    """A side adds a vertex (and a triangle on it) with an id near -2^63 (rows; on any storage a positive one),
+    the other one near 2^63: the SQL detection (its one-ring through the vertex BRIN, in chunks through the
+    object's chunks) finds merge3's regions, as it did before the spans."""
     from tests.merge_data import make_fault
     from tests.test_sql_merge_regions import psql
 
     fault = make_fault(conn)
-    low, high = -(2**63) + 5, 2**63 - 5
+    high = 2**63 - 5
     add = "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, %s, %s, %s, %s)"
     tri = "INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, %s, %s, %s, %s)"
     psql(conn, "e1", (add, (fault, low, 50.0, -300.0, 0.0)), (tri, (fault, 10**6, 1, 0, low)))
@@ -405,8 +450,8 @@ def test_new_vertices_at_both_ends_of_bigint_give_merge3s_regions_in_sql(conn: C
 def test_partitioned_cell_storage_has_the_vertex_brin_on_every_partition_and_versioning_again_keeps_one(
     conn: Conn,
 ) -> None:
-    """Model 1 hash-partitioned (tgsis.partition_model_storage): the vertex BRIN is made on the partitioned
-    storage and so on each partition; disabling and enabling versioning twice leaves exactly one; the regions
+    """Model 1 hash-partitioned (tgsis.partition_model_storage): the vertex BRIN (in chunks: the revision BRIN)
+    is made on the partitioned storage and so on each partition; disabling and enabling versioning twice leaves exactly one; the regions
     found through it are merge3's."""
     tgsis.partition_model_storage(conn, 1, 3)
     tgsis.create_feature_class(conn, "faults", "SURFACE")
@@ -417,17 +462,21 @@ def test_partitioned_cell_storage_has_the_vertex_brin_on_every_partition_and_ver
         conn.commit()
     tgsis.enable_feature_versioning(conn)
     conn.commit()
-    brin = [
-        d for am, d in _indexes(conn, "tgsis.trgl_ver") if am == "brin" and "(geoid, vrtxid1, vrtxid2, vrtxid3)" in d
-    ]
-    assert len(brin) == 1, _indexes(conn, "tgsis.trgl_ver")
+    storage = storage_of(conn, "trgl")
+
+    def brin(relation: str) -> list[str]:
+        """Its vertex BRIN on rows; in chunks (no vertex column to index) its revision BRIN, made with the chunk
+        table and partitioned with it (tgsis.create_chunk_table, partition_model_storage)."""
+        wanted = "(revision)" if in_chunks(conn, "trgl") else "(geoid, vrtxid1, vrtxid2, vrtxid3)"
+        return [d for am, d in _indexes(conn, relation) if am == "brin" and wanted in d]
+
+    assert len(brin(storage)) == 1, _indexes(conn, storage)
     parts = conn.execute(
-        "SELECT inhrelid::regclass::text FROM pg_inherits WHERE inhparent = 'tgsis.trgl_ver'::regclass"
+        "SELECT inhrelid::regclass::text FROM pg_inherits WHERE inhparent = %s::regclass", (storage,)
     ).fetchall()
     assert len(parts) == 3
     for (part,) in parts:
-        found = [d for am, d in _indexes(conn, part) if am == "brin" and "(geoid, vrtxid1, vrtxid2, vrtxid3)" in d]
-        assert len(found) == 1, (part, _indexes(conn, part))
+        assert len(brin(part)) == 1, (part, _indexes(conn, part))
     from tests.merge_data import curved_surface, move
 
     surface = curved_surface()
@@ -470,9 +519,9 @@ def test_the_sql_merge_checks_validity_on_the_cells_near_the_change_by_spans_of_
     """The psql merge by region (tgsis.merge_mesh_validity): the cells on the vertices near what it changes come
     from the vertex BRIN by spans, on PostgreSQL 15 as on 18."""
     plans = _plans_of(conn, lambda: conn.execute("SELECT tgsis.merge_version('e1')"))
-    local = [p for p in plans if "INSERT INTO pg_temp.tgsis_mw_local" in p and "trgl_ver v" in p]
+    local = [p for p in plans if "INSERT INTO pg_temp.tgsis_mw_local" in p and _cells(conn) in p]
     assert len(local) == 1, [p[:200] for p in plans]
-    _reads_the_ring_by_spans(local[0])
+    _reads_the_ring(conn, local[0])
 
 
 def test_among_many_objects_the_ring_is_read_by_the_objects_ranges_alone(conn: Conn) -> None:
@@ -508,21 +557,19 @@ def test_among_many_objects_the_ring_is_read_by_the_objects_ranges_alone(conn: C
                 (dz, geoid, [int(i) for i in ids.ravel()]),
             )
         conn.commit()
-    conn.autocommit = True
-    conn.execute("VACUUM ANALYZE tgsis.trgl_ver, tgsis.vrtx_ver")
-    conn.autocommit = False
+    _vacuum_model_storage(conn)
     plans = _plans_of(
         conn, lambda: conn.execute("SELECT count(*) FROM tgsis.mesh_merge_regions('e1', %s)", (geoid,)).fetchall()
     )
     (ring,) = [p for p in plans if "INSERT INTO pg_temp.tgsis_mr_margin" in p]
-    _reads_the_ring_by_spans(ring)
-    assert "trgl_ver_pkey" not in ring, ring
+    _reads_the_ring(conn, ring)
+    assert in_chunks(conn, "trgl") or "trgl_ver_pkey" not in ring, ring
     read: list[Any] = []
     plans = _plans_of(conn, lambda: read.append(_merge_states.read_merge_change(conn, "e1", geoid)))
-    on_vertices = [p for p in plans if "trgl_ver v" in p and re.search(r'vrtxid2"?( \+ 0\))? = ANY', p)]
+    on_vertices = [p for p in plans if _cells(conn) in p and re.search(r'vrtxid2"?( \+ 0\))? = ANY', p)]
     assert len(on_vertices) == 1, plans
-    _reads_the_ring_by_spans(on_vertices[0])
-    assert "trgl_ver_pkey" not in on_vertices[0], on_vertices[0]
+    _reads_the_ring(conn, on_vertices[0])
+    assert in_chunks(conn, "trgl") or "trgl_ver_pkey" not in on_vertices[0], on_vertices[0]
     assert_same_regions(conn, "e1", geoid)
 
 

@@ -21,6 +21,7 @@ from psycopg import sql
 import tgsis
 from tests.roles import login_roles
 from tests.sessions import connect
+from tests.storage_data import storage_of
 from tests.synthetic import flat_grid
 from tgsis.db import features as F
 
@@ -39,15 +40,16 @@ def items(conn: Conn) -> Conn:
 
 
 def _scanned(conn: Conn, revisions: list[int]) -> set[tuple[str, str, str]]:
-    """(object class, key, short name) of every row version written or closed in the revisions: a scan of storage."""
+    """(object class, key, short name) of every row version written or closed in the revisions: a scan of storage
+    (``tgsis.storage_table``: ``<t>_ver``, or a model table's chunk versions)."""
     found: set[tuple[str, str, str]] = set()
     for schema, table, key, objectclass, shortname in conn.execute(
         "SELECT schemaname, tablename, objectkeyfield, objectclass, shortname FROM tgsis.versioned_tables"
     ).fetchall():
         rows = conn.execute(
             sql.SQL(
-                "SELECT DISTINCT {}::text FROM {}.{} WHERE revision = ANY (%(r)s::int[]) OR lastrevs && %(r)s::int[]"
-            ).format(sql.Identifier(key), sql.Identifier(schema), sql.Identifier(table + "_ver")),
+                "SELECT DISTINCT {}::text FROM {} WHERE revision = ANY (%(r)s::int[]) OR lastrevs && %(r)s::int[]"
+            ).format(sql.Identifier(key), sql.SQL(storage_of(conn, table, schema))),
             {"r": revisions},
         ).fetchall()
         found |= {(objectclass, k, shortname) for (k,) in rows}

@@ -2,7 +2,8 @@
 
 Each hole found by a hostile review is tried with real login roles, and its
 variants: editors rewriting another editor's version, a frozen revision or
-DEFAULT straight in ``<table>_ver`` (by UPDATE, DELETE, INSERT, binary COPY),
+DEFAULT straight in the storage, ``<table>_ver`` or a model table's chunks
+``tgsis.<t>_chunk`` (by UPDATE, DELETE, TRUNCATE, INSERT, binary COPY),
 an operator shadowing ``=`` for the storage trigger, a statement switching
 the session's version between rows, a reader holding the version lock. Every
 refusal leaves the database as it was (``_state``). What docs/security.md
@@ -23,8 +24,11 @@ from psycopg import sql
 import tgsis
 from tests.conftest import BuiltOnce
 from tests.roles import Roles, login_roles
+from tests.storage_data import in_chunks, stored_versions
 from tests.synthetic import flat_grid
+from tgsis._chunks import encode, to_copy
 from tgsis.db import features as F
+from tgsis.db._chunk_transfer import chunk_table
 from tgsis.db._transfer import copy_in
 from tgsis.db.copy import encode_rows
 from tgsis.errors import reraise
@@ -79,9 +83,8 @@ def _state(dsn: str) -> tuple[list[Any], ...]:
             c.execute("SELECT * FROM tgsis.revisions ORDER BY revision").fetchall(),
             c.execute("SELECT * FROM tgsis.conflicts ORDER BY 1, 2, 3").fetchall(),
             c.execute("SELECT * FROM wells_ver ORDER BY id, revision").fetchall(),
-            c.execute(
-                "SELECT geoid, vrtxid, x, y, z, revision, lastrevs FROM tgsis.vrtx_ver ORDER BY 1, 2, 6"
-            ).fetchall(),
+            stored_versions(c, "vrtx"),  # rows or chunk versions (tgsis.storage_table)
+            stored_versions(c, "trgl"),
             c.execute("SELECT geoid, geoname, revision, lastrevs FROM tgsis.geometry_ver ORDER BY 1, 3").fetchall(),
         )
 
@@ -109,23 +112,38 @@ def _revision_of(conn: Conn, version: str) -> int:
 # --------------------------------------------------------------------------- storage written directly
 
 
-@pytest.mark.parametrize(
-    "statement",
-    [
-        "UPDATE wells_ver SET depth = 666",
-        "UPDATE tgsis.vrtx_ver SET z = 666",
-        "DELETE FROM tgsis.trgl_ver",
-        "DELETE FROM wells_ver WHERE revision = 0",
-        "TRUNCATE tgsis.vrtx_ver",
-        "UPDATE horizons_ver SET _geoid = _geoid",
+# each attack on storage as rows (<t>_ver) and as chunks (<t>_chunk, the same meaning on the layout's own objects)
+STORAGE_ATTACKS: dict[str, tuple[str, str]] = {
+    "update-wells": ("UPDATE wells_ver SET depth = 666",) * 2,
+    "update-vertices": ("UPDATE tgsis.vrtx_ver SET z = 666", "UPDATE tgsis.vrtx_chunk SET z[1] = 666"),
+    "update-chunk-revision": ("UPDATE tgsis.vrtx_ver SET revision = 0", "UPDATE tgsis.vrtx_chunk SET revision = 0"),
+    "reopen-closed": ("UPDATE tgsis.vrtx_ver SET lastrevs = '{}'", "UPDATE tgsis.vrtx_chunk SET lastrevs = '{}'"),
+    "delete-triangles": ("DELETE FROM tgsis.trgl_ver", "DELETE FROM tgsis.trgl_chunk"),
+    "delete-wells": ("DELETE FROM wells_ver WHERE revision = 0",) * 2,
+    "truncate-vertices": ("TRUNCATE tgsis.vrtx_ver", "TRUNCATE tgsis.vrtx_chunk"),
+    "truncate-triangles": ("TRUNCATE tgsis.trgl_ver", "TRUNCATE tgsis.trgl_chunk"),
+    "update-properties": ("UPDATE horizons_ver SET _geoid = _geoid",) * 2,
+    "upsert-wells": (
         "INSERT INTO wells_ver (id, name, depth, revision) VALUES (1, 'x', 666, 0) "
         "ON CONFLICT (id, revision) DO UPDATE SET depth = 666",
-    ],
-)
-def test_editors_cannot_update_or_delete_storage(roles: Roles, db_dsn: str, statement: str) -> None:
+    )
+    * 2,
+    "upsert-vertices": (
+        "INSERT INTO tgsis.vrtx_ver (geoid, vrtxid, x, y, z, revision) SELECT geoid, vrtxid, x, y, z, revision"
+        " FROM tgsis.vrtx_ver ON CONFLICT (geoid, vrtxid, revision) DO UPDATE SET z = 666",
+        "INSERT INTO tgsis.vrtx_chunk (geoid, chunk, revision, x, y, z) SELECT geoid, chunk, revision, x, y, z"
+        " FROM tgsis.vrtx_chunk ON CONFLICT (geoid, chunk, revision) DO UPDATE SET z[1] = 666",
+    ),
+}
+
+
+@pytest.mark.parametrize("attack", sorted(STORAGE_ATTACKS))
+def test_editors_cannot_update_or_delete_storage(roles: Roles, db_dsn: str, attack: str) -> None:
     bob = roles.connect("bob")
+    statement = STORAGE_ATTACKS[attack][in_chunks(bob)]
+    bob.rollback()
     before = _state(db_dsn)
-    assert _sqlstate(_refused(bob, statement)) == "42501"  # permission denied: only storage's owner may
+    assert _sqlstate(_refused(bob, statement)) == "42501", statement  # permission denied: only storage's owner may
     assert _state(db_dsn) == before
 
 
@@ -149,6 +167,18 @@ def test_editors_cannot_insert_rows_of_another_revision(roles: Roles, db_dsn: st
         (_revision_of(bob, "DEFAULT"), [label]),
     )
     assert _sqlstate(error) == "TG002"
+    # the same into the model storage, a vertex row or a chunk (of the surface, whose class bob may change)
+    geoid = int(bob.execute("SELECT min(geoid) FROM tgsis.geometry").fetchone()[0])  # type: ignore[index]
+    forged = (
+        "INSERT INTO tgsis.vrtx_chunk (geoid, chunk, revision, lastrevs, x, y, z) "
+        "VALUES (%s, 7, %s, %s, '{0}', '{0}', '{666}')"
+        if in_chunks(bob)
+        else "INSERT INTO tgsis.vrtx_ver (geoid, vrtxid, x, y, z, revision, lastrevs) VALUES (%s, 7000, 0, 0, 666, %s, %s)"
+    )
+    bob.rollback()
+    for revision, lastrevs in ((label, []), (_revision_of(bob, "DEFAULT"), [label])):
+        error = _refused(bob, forged, (geoid, revision, lastrevs))
+        assert _sqlstate(error) == "TG002", (forged, revision, lastrevs, error)
     assert _state(db_dsn) == before
 
 
@@ -156,30 +186,42 @@ def test_a_binary_copy_with_a_forged_revision_is_refused_whole(roles: Roles, db_
     """The client's bulk path, with rows of alice's version slipped in among bob's own."""
     bob = roles.connect("bob")
     own, alices = _revision_of(bob, "DEFAULT"), _revision_of(bob, "a1")
+    storage, columns, payload = _forged_vertices(bob, own, alices)
     before = _state(db_dsn)
-    payload = encode_rows(
-        [
-            (np.array([50, 51]), "int8"),
-            (np.array([0, 0]), "int8"),
-            (np.zeros(2), "float8"),
-            (np.zeros(2), "float8"),
-            (np.full(2, 666.0), "float8"),
-            (np.array([own, alices]), "int4"),
-        ]
-    )
     # the model tables are under row-level security (per-class rights): PostgreSQL refuses a role's COPY
     # into them, and the client stages its rows (tgsis.db._transfer.staged); the check holds on that path
+    names = sql.SQL(", ").join(map(sql.Identifier, columns))
     with pytest.raises(psycopg.errors.FeatureNotSupported, match="row-level security"):
-        with bob.cursor().copy(
-            "COPY tgsis.vrtx_ver (geoid, vrtxid, x, y, z, revision) FROM STDIN (FORMAT binary)"
-        ) as cp:
+        with bob.cursor().copy(sql.SQL("COPY {} ({}) FROM STDIN (FORMAT binary)").format(storage, names)) as cp:
             cp.write(payload)
     bob.rollback()
     with pytest.raises(tgsis.MissingPrivilegeError, match="1 row"):
         with reraise(), bob.transaction():
-            copy_in(bob, sql.SQL("tgsis.vrtx_ver"), ["geoid", "vrtxid", "x", "y", "z", "revision"], payload)
+            copy_in(bob, storage, columns, payload)
     bob.rollback()
     assert _state(db_dsn) == before
+
+
+def _forged_vertices(conn: Conn, own: int, alices: int) -> tuple[sql.Composable, list[str], bytes]:
+    """A vertex of each of two new objects (geoids 50 and 51), the second labelled with alice's revision: the
+    storage of tgsis.vrtx in use, its columns and their binary COPY payload (rows, or one chunk per object)."""
+    if not in_chunks(conn):
+        payload = encode_rows(
+            [
+                (np.array([50, 51]), "int8"),
+                (np.array([0, 0]), "int8"),
+                (np.zeros(2), "float8"),
+                (np.zeros(2), "float8"),
+                (np.full(2, 666.0), "float8"),
+                (np.array([own, alices]), "int4"),
+            ]
+        )
+        return sql.SQL("tgsis.vrtx_ver"), ["geoid", "vrtxid", "x", "y", "z", "revision"], payload
+    layout = chunk_table(conn, "vrtx")
+    vertex = encode([0], {"x": [0.0], "y": [0.0], "z": [666.0]}, layout.columns)
+    first, second = (to_copy(vertex, geoid, revision) for geoid, revision in ((50, own), (51, alices)))
+    # one stream, as the client's upload writes several objects: the header once, the trailer once
+    return sql.SQL("tgsis.vrtx_chunk"), layout.columns.copy_columns(), first[:-2] + second[19:]
 
 
 def test_a_role_without_the_write_right_cannot_upload_into_its_version(roles: Roles, db_dsn: str) -> None:

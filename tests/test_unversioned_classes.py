@@ -19,6 +19,7 @@ import tgsis
 from tests.fetched import mesh_of
 from tests.gmaps_shapes import block_tetrahedra
 from tests.roles import login_roles
+from tests.storage_data import row_versions
 from tests.temporal_data import evolving, series
 from tgsis.cli import main
 
@@ -55,22 +56,14 @@ def _classes(conn: Conn) -> tuple[tgsis.FeatureClass, tgsis.FeatureClass]:
     return horizons, wells
 
 
-def _decoded(conn: Conn, table: str) -> str:
-    """The stored versions of a model table's rows, one row each: ``tgsis.<t>_ver``, or in chunks
-    ``tgsis.<t>_chunk_rows`` (each chunk version's rows with its revision and lastrevs)."""
-    row = conn.execute("SELECT tgsis.storage_row_versions('tgsis', %s)", (table,)).fetchone()
-    assert row is not None
-    return str(row[0])
-
-
 def _stored(conn: Conn, geoid: int) -> list[tuple[Any, ...]]:
     """(table, revision, closed) of every stored row of ``geoid`` in model 1's storage."""
     return [
         tuple(r)
         for r in conn.execute(
             "SELECT 'geometry', revision, revclosed FROM tgsis.geometry_ver WHERE geoid = %(g)s "
-            f"UNION ALL SELECT 'vrtx', revision, revclosed FROM {_decoded(conn, 'vrtx')} WHERE geoid = %(g)s "
-            f"UNION ALL SELECT 'trgl', revision, revclosed FROM {_decoded(conn, 'trgl')} WHERE geoid = %(g)s",
+            f"UNION ALL SELECT 'vrtx', revision, revclosed FROM {row_versions(conn, 'vrtx')} v WHERE geoid = %(g)s "
+            f"UNION ALL SELECT 'trgl', revision, revclosed FROM {row_versions(conn, 'trgl')} v WHERE geoid = %(g)s",
             {"g": geoid},
         ).fetchall()
     ]
@@ -186,11 +179,12 @@ def test_writes_through_the_views_change_rows_in_place_in_default(conn: Conn) ->
     conn.execute("INSERT INTO tgsis.trgl (geoid, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, 100, 0, 1, 4)", (well,))
     conn.commit()
     rows = conn.execute(
-        f"SELECT revision, lastrevs FROM {_decoded(conn, 'trgl')} WHERE geoid = %s AND trglid IN (0, 100)", (well,)
+        f"SELECT revision, lastrevs FROM {row_versions(conn, 'trgl')} v WHERE geoid = %s AND trglid IN (0, 100)",
+        (well,),
     ).fetchall()
     assert rows == [(0, [])]  # trglid 0 gone for good, 100 of no version
     assert conn.execute(
-        f"SELECT count(*), min(revision), max(revision) FROM {_decoded(conn, 'vrtx')} WHERE geoid = %s", (well,)
+        f"SELECT count(*), min(revision), max(revision) FROM {row_versions(conn, 'vrtx')} v WHERE geoid = %s", (well,)
     ).fetchone() == (9, 0, 0)
     with tgsis.in_version(conn, "v1"):
         assert conn.execute("SELECT z FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = 0", (well,)).fetchone() == (3.0,)
@@ -302,7 +296,7 @@ def test_two_sessions_editing_one_feature_of_no_version(db_dsn: str) -> None:
         b.execute("UPDATE tgsis.vrtx SET z = z + 10 WHERE geoid = %s AND vrtxid = 4", (well,))
         b.commit()
         assert a.execute(
-            f"SELECT z, (SELECT count(*) FROM {_decoded(a, 'vrtx')} WHERE geoid = %s AND vrtxid = 4) "
+            f"SELECT z, (SELECT count(*) FROM {row_versions(a, 'vrtx')} v WHERE geoid = %s AND vrtxid = 4) "
             "FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = 4",
             (well, well),
         ).fetchone() == (11.0, 1)

@@ -22,6 +22,7 @@ import pytest
 
 import tgsis
 from tests.roles import login_roles
+from tests.storage_data import row_versions
 
 Conn = psycopg.Connection[Any]
 
@@ -306,7 +307,7 @@ def test_features_of_no_version_and_versioned_ones_in_one_statement(conn: Conn) 
     assert conn.execute(statement, ([horizon, well],)).rowcount == 6
     conn.commit()
     stored = conn.execute(
-        "SELECT geoid, revision, revclosed, z FROM tgsis.vrtx_ver WHERE geoid = ANY (%s) "
+        f"SELECT geoid, revision, revclosed, z FROM {row_versions(conn, 'vrtx')} v WHERE geoid = ANY (%s) "
         "ORDER BY geoid, revclosed DESC, vrtxid",
         ([horizon, well],),
     ).fetchall()

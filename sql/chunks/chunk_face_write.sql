@@ -38,7 +38,11 @@
 --     statement ends (this function, fired AFTER the UPDATE statement): all
 --     queued rows at once, the chunks they touch locked in key order, compared
 --     set-based, written by one call of tgsis.write_chunk_rows (a key twice in
---     one statement: 21000). INSERT, DELETE and key changes are written per
+--     one statement: 21000); a statement changing features of versioned
+--     classes and of classes without versioning (which no row leaves: each
+--     keeps its key) is written in two groups, the latter in revision 0, as
+--     today's view writes row by row (one group's revision for both was
+--     TG300). INSERT, DELETE and key changes are written per
 --     row through pg_temp.tgsis_face_now_<view oid>.
 -- The temporary tables are refused (42501) when the session made them itself
 -- (another owner): rows written here come only from the face's own rows.
@@ -84,6 +88,8 @@ DECLARE
     v_mine      boolean;
     v_dup       boolean;
     v_tab       text;
+    v_split     boolean;   -- the flush's second group (features of classes without versioning) waits in v_now
+    v_moved     bigint;
 BEGIN
     SELECT * INTO v_reg FROM tgsis.model_tables t WHERE t.tablename = v_table;
     v_chunk := format('tgsis.%I', v_table || '_chunk');
@@ -150,8 +156,23 @@ BEGIN
         END IF;
     END LOOP;
 
+    <<groups>>
+    LOOP
+    IF TG_LEVEL = 'STATEMENT' AND v_split IS NULL THEN
+        -- features of classes without versioning are written in revision 0, the others in the working revision:
+        -- when the statement changed both, those of no version wait in v_now (empty between rows) for a second pass
+        v_split := false;
+        IF v_reg.objectclass = 'feature'
+           AND EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = v_table) THEN
+            EXECUTE format('WITH moved AS (DELETE FROM %1$s q WHERE q.%3$I IN (SELECT u.geoid FROM tgsis.unversioned_features u) '
+                           '  AND EXISTS (SELECT FROM %1$s o WHERE o.%3$I NOT IN (SELECT u.geoid FROM tgsis.unversioned_features u)) '
+                           'RETURNING q.*) INSERT INTO %2$s SELECT * FROM moved', v_queue, v_now, v_kc);
+            GET DIAGNOSTICS v_moved = ROW_COUNT;
+            v_split := v_moved > 0;
+        END IF;
+    END IF;
     IF TG_LEVEL = 'STATEMENT' THEN
-        -- the end of an UPDATE: every queued row of the face at once
+        -- the end of an UPDATE: every queued row of the face at once (of one group)
         EXECUTE format('SELECT count(*), count(DISTINCT (%s)), array_agg(DISTINCT q.%I::text) FROM %s q',
                        array_to_string(ARRAY(SELECT format('q.%I', k) FROM unnest(v_keycols) AS k), ', '), v_kc, v_queue)
            INTO v_count, v_distinct, v_keys;
@@ -249,8 +270,16 @@ BEGIN
         END IF;
         PERFORM tgsis.write_chunk_rows(v_table, v_queue::regclass);
         EXECUTE format('DELETE FROM %s', v_queue);
+        IF v_split THEN
+            -- the second group: the features of classes without versioning, checked and written the same way
+            v_split := false;
+            EXECUTE format('WITH moved AS (DELETE FROM %s RETURNING *) INSERT INTO %s SELECT * FROM moved', v_now, v_queue);
+            CONTINUE groups;
+        END IF;
         RETURN NULL;
     END IF;
+    EXIT groups;
+    END LOOP groups;
 
     -- the chunks' locks (the old key's, the new key's), in key order
     EXECUTE format('SELECT ARRAY(SELECT DISTINCT k FROM unnest(ARRAY[%s]) AS k WHERE k IS NOT NULL ORDER BY k)',

@@ -1,0 +1,47 @@
+"""Storage-neutral test helpers: what a test asks the database about how model 1 is stored (issue 40).
+
+A test runs on rows or on chunks (``TGSIS_TEST_STORAGE``, docs/testing.md).
+It names storage through the product (``tgsis.storage_table``,
+``tgsis.stored_in_chunks``), never by spelling ``tgsis.<t>_ver``; where the
+two storages answer differently by design (docs/storage.md, "What differs
+from rows"), it asks :func:`in_chunks` which answer is documented.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import psycopg
+
+Conn = psycopg.Connection[Any]
+
+
+def in_chunks(conn: Conn, table: str = "vrtx") -> bool:
+    """Whether model table ``tgsis.<table>`` is stored in chunks (``tgsis.stored_in_chunks``)."""
+    row = conn.execute("SELECT tgsis.stored_in_chunks(%s)", (table,)).fetchone()
+    assert row is not None
+    return bool(row[0])
+
+
+def storage_of(conn: Conn, table: str, schema: str = "tgsis") -> str:
+    """The quoted ``schema.name`` that stores ``table``'s rows: ``<t>_chunk``, ``<t>_ver`` or the table
+    (``tgsis.storage_table``)."""
+    row = conn.execute("SELECT tgsis.storage_table(%s, %s)", (schema, table)).fetchone()
+    assert row is not None
+    return str(row[0])
+
+
+def stored_versions(conn: Conn, table: str, schema: str = "tgsis") -> list[tuple[Any, ...]]:
+    """Every stored row or chunk version of ``table``, all columns, in key and revision order: what a refused
+    write must leave alone, on either storage."""
+    storage = storage_of(conn, table, schema)
+    return conn.execute(f"SELECT * FROM {storage} AS s ORDER BY s::text").fetchall()
+
+
+def row_versions(conn: Conn, table: str, schema: str = "tgsis") -> str:
+    """A relation of the stored row versions of ``table``, one row each with the row table's columns and revision,
+    lastrevs, revclosed: ``<t>_ver``, or in chunks each chunk version's rows decoded
+    (``tgsis.storage_row_versions``, a parenthesized subquery or a relation name: alias it)."""
+    row = conn.execute("SELECT tgsis.storage_row_versions(%s, %s)", (schema, table)).fetchone()
+    assert row is not None
+    return str(row[0])
