@@ -144,17 +144,8 @@ BEGIN
                        CASE WHEN v_pol.withcheck IS NOT NULL THEN format(' WITH CHECK (%s)', v_pol.withcheck) ELSE '' END);
         EXECUTE format('COMMENT ON POLICY %I ON %s IS %L', v_pol.polname, v_chunk, obj_description(v_pol.oid, 'pg_policy'));
     END LOOP;
-    -- what the roles that keep INSERT (the client's COPY upload) write is checked (tgsis.chunk_insert_check);
-    -- the owners are spared, by role name as tgsis.guard_chunk_storage's triggers (a restored dump keeps names)
-    EXECUTE format('CREATE TRIGGER tgsis_chunk_insert AFTER INSERT ON %s REFERENCING NEW TABLE AS tgsis_new_chunks '
-                   'FOR EACH STATEMENT WHEN (NOT pg_catalog.pg_has_role(current_user, %L::name, ''USAGE'') '
-                   'AND NOT pg_catalog.pg_has_role(current_user, %L::name, ''USAGE'')) '
-                   'EXECUTE FUNCTION tgsis.chunk_insert_check(%L)',
-                   v_chunk, (SELECT pg_get_userbyid(c.relowner) FROM pg_class c WHERE c.oid = v_chunk),
-                   (SELECT pg_get_userbyid(n.nspowner) FROM pg_namespace n WHERE n.nspname = 'tgsis'), p_table);
-    EXECUTE format('COMMENT ON TRIGGER tgsis_chunk_insert ON %s IS %L', v_chunk,
-                   'chunk versions inserted directly by roles other than the owners are encoded as read, and open of revision 0 '
-                   'while unversioned (tgsis.chunk_insert_check)');
+    -- what the roles that keep INSERT (the client's COPY upload) write is checked (tgsis.chunk_insert_check)
+    PERFORM tgsis.create_chunk_insert_trigger(p_table, v_chunk);
     RETURN v_chunk;
 END
 $$;

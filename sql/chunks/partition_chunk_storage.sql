@@ -91,11 +91,11 @@ BEGIN
                     AND EXISTS (SELECT FROM pg_policy p WHERE p.oid = d.objid AND p.polrelid = v_chunk))
            AND d.classid NOT IN ('pg_trigger'::regclass, 'pg_attrdef'::regclass)
         UNION ALL
-        -- triggers other than the guards of versioned storage (made again)
+        -- triggers other than the guards of versioned storage and the insert check (made again)
         SELECT format('trigger %s on %s', t.tgname, t.tgrelid::regclass)
           FROM pg_trigger t
          WHERE NOT t.tgisinternal AND t.tgrelid = v_chunk
-           AND t.tgname NOT IN ('tgsis_storage_write', 'tgsis_storage_rows', 'tgsis_storage_changes')
+           AND t.tgname NOT IN ('tgsis_storage_write', 'tgsis_storage_rows', 'tgsis_storage_changes', 'tgsis_chunk_insert')
     ) AS s(u);
     IF v_users IS NOT NULL THEN
         RAISE EXCEPTION 'tgsis.% is used by other objects', quote_ident(p_table)
@@ -193,6 +193,7 @@ BEGIN
             EXECUTE format('ALTER INDEX %s RENAME TO %I', v_index.idx, v_index.old);  -- a key's constraint too
         END IF;
     END LOOP;
+    PERFORM tgsis.create_chunk_insert_trigger(p_table, v_new);  -- direct inserts checked as before
     IF EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table) THEN
         PERFORM tgsis.guard_chunk_storage(p_table);  -- the rights, labels and notes its triggers kept
     END IF;
