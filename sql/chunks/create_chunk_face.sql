@@ -66,10 +66,12 @@ BEGIN
                    v_view, v_dec.select_list, v_chunk, v_dec.arrays, v_dec.aliases, array_to_string(v_where, ' AND '));
     v_face := format('tgsis.%I', v_view)::regclass;
     EXECUTE format('COMMENT ON VIEW %s IS %L', v_face,
-                   format('%s, stored in chunks (%s, docs/storage.md "The relational face"): the rows of the %s chunk versions, '
+                   -- one text whether versioned or not: the WHERE above asks at each read, and a table versioned after
+                   -- the switch has the face of one switched while versioned (tests/test_storage_default.py)
+                   format('%s, stored in chunks (%s, docs/storage.md "The relational face"): the rows of the visible chunk versions '
+                          '(those of the session''s version when versioned), '
                           'written through INSTEAD OF triggers (tgsis.chunk_face_write); one vertex by key is read fastest by the keyed reads of model 1 (vertex, vertices)',
-                          coalesce(obj_description(v_storage, 'pg_class'), 'tgsis.' || p_table), v_chunk,
-                          CASE WHEN v_versioned THEN 'session''s visible' ELSE 'stored' END));
+                          coalesce(obj_description(v_storage, 'pg_class'), 'tgsis.' || p_table), v_chunk));
     FOR v_c IN SELECT a.attname, col_description(v_storage, s.attnum) AS note
                  FROM pg_attribute a JOIN pg_attribute s ON s.attrelid = v_storage AND s.attname = a.attname
                 WHERE a.attrelid = v_face AND a.attnum > 0 LOOP

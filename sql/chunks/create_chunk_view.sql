@@ -37,8 +37,13 @@ BEGIN
                           'and the chunk version''s revision, lastrevs, revclosed (no visibility filter)', v_chunk, p_table));
     FOR v_c IN SELECT a.attname, a.attnum FROM pg_attribute a
                 WHERE a.attrelid = format('tgsis.%I', v_view)::regclass AND a.attnum > 0 ORDER BY a.attnum LOOP
+        -- revision, lastrevs, revclosed: the chunk table's (a versioned row storage has its own, of row versions)
         EXECUTE format('COMMENT ON COLUMN tgsis.%I.%I IS %L', v_view, v_c.attname,
-                       coalesce(col_description(tgsis.row_shape(p_table),
+                       coalesce(CASE WHEN v_c.attname IN ('revision', 'lastrevs', 'revclosed')
+                                     THEN col_description(v_chunk, (SELECT a.attnum FROM pg_attribute a
+                                                                     WHERE a.attrelid = v_chunk AND a.attname = v_c.attname)::integer)
+                                END,
+                                col_description(tgsis.row_shape(p_table),
                                                 (SELECT a.attnum FROM pg_attribute a
                                                   WHERE a.attrelid = tgsis.row_shape(p_table)
                                                     AND a.attname = v_c.attname)::integer),

@@ -86,7 +86,8 @@ BEGIN
     EXECUTE format('ALTER TABLE tgsis.%I ADD CONSTRAINT %I PRIMARY KEY (%s)', v_shape, v_shape || '_pkey',
                    (SELECT string_agg(quote_ident(k), ', ' ORDER BY o) FROM unnest(v_keys) WITH ORDINALITY AS u(k, o)));
     EXECUTE format('ALTER TABLE tgsis.%I ADD CONSTRAINT %I CHECK (false)', v_shape, p_table || '_shape_holds_no_rows');
-    EXECUTE format('REVOKE ALL ON tgsis.%I FROM PUBLIC', v_shape);
+    -- no REVOKE: a new table's default rights are its owner's alone, and an explicit ACL saying the same would not
+    -- come back from pg_dump (which leaves out an ACL equal to the default): a restore would differ
     -- the row table's own comment first: the face's comment starts with it (tgsis.create_chunk_face)
     EXECUTE format('COMMENT ON TABLE tgsis.%I IS %L', v_shape,
                    coalesce(v_versioned.tablecomment, obj_description(v_storage, 'pg_class')));

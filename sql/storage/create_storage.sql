@@ -14,6 +14,10 @@
 -- A model whose tables are all there is skipped, so the function also serves an
 -- upgrade that registers a new model: its tables are created and granted, and
 -- the geotype/time-model check of tgsis.geometry follows the registry.
+-- The tables registered for chunks (tgsis.model_tables.chunkcolumn: model 1's)
+-- are switched to chunks right after they are created, empty, when
+-- tgsis.chosen_storage() says chunks (the default; the setting tgsis.storage =
+-- rows keeps rows): docs/storage.md, "The storage switch".
 CREATE FUNCTION tgsis.create_storage()
 RETURNS boolean
 LANGUAGE plpgsql
@@ -24,6 +28,7 @@ DECLARE
     v_model   record;
     v_created boolean := false;
     v_core    boolean := to_regclass('tgsis.geometry') IS NULL;
+    v_storage text := tgsis.chosen_storage();  -- TG001 for a bad tgsis.storage, before anything is made
 BEGIN
     FOR v_model IN SELECT m.model, m.create_function FROM tgsis.data_models m ORDER BY m.model LOOP
         -- a versioned table's name is its view: it counts as existing storage
@@ -42,6 +47,12 @@ BEGIN
         EXECUTE format('SELECT tgsis.%I()', v_model.create_function);
         PERFORM tgsis.grant_model_tables(v_model.model);
         PERFORM tgsis.protect_model_tables(v_model.model);  -- per-class rights at the model tables
+        IF v_storage = 'chunks' THEN  -- empty: the switch is cheap
+            PERFORM tgsis.store_in_chunks(t.tablename)
+               FROM tgsis.model_tables t
+              WHERE t.model = v_model.model AND t.chunkcolumn IS NOT NULL
+              ORDER BY t.iudorder, t.tablename;
+        END IF;
         v_created := true;
     END LOOP;
     IF v_created AND NOT v_core THEN
@@ -56,4 +67,4 @@ $storage$;
 REVOKE ALL ON FUNCTION tgsis.create_storage() FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.create_storage() IS
-    'create the tables of every registered data model (tgsis.data_models, tgsis.model_tables) that are missing, with their grants; returns whether it created any. Run by the plain-SQL script and by tgsis.install after CREATE EXTENSION, so that they are not extension members and pg_dump keeps them';
+    'create the tables of every registered data model (tgsis.data_models, tgsis.model_tables) that are missing, with their grants, those registered for chunks stored in chunks unless the setting tgsis.storage is rows (tgsis.chosen_storage); returns whether it created any. Run by the plain-SQL script and by tgsis.install after CREATE EXTENSION, so that they are not extension members and pg_dump keeps them';

@@ -347,6 +347,56 @@ BEGIN
 END
 $keys$;
 
+-- ---- issue40-default: model 1 is stored in chunks (docs/storage.md, "The storage switch"): its tables,
+-- with their data, versioned or not, switched by tgsis.store_in_chunks, which verifies that every version
+-- and revision sees the same rows before the row storage goes. After the blocks above (they read the
+-- <table>_ver of versioned tables). The setting tgsis.storage = rows keeps rows (tgsis.chosen_storage:
+-- `tgsis db install --storage rows`, or SET in psql first). A table that cannot switch stays rows with a
+-- WARNING naming it and the way to switch later: partitioned storage (TG100), or a layout chunks do not
+-- hold (TG100), or a user's view over it (PostgreSQL's 2BP01); the upgrade goes on. What the switch makes
+-- is made at run time in a fresh install (tgsis.create_storage): not extension members.
+DO $chunks$
+DECLARE
+    v_extension oid := (SELECT oid FROM pg_catalog.pg_extension WHERE extname = 'tgsis');
+    v_members   text[];
+    v_object    record;
+    v_table     text;
+    v_detail    text;
+BEGIN
+    IF tgsis.chosen_storage() <> 'chunks' THEN  -- (TG001 for a bad value: the upgrade stops, naming it)
+        RETURN;
+    END IF;
+    v_members := ARRAY(SELECT d.classid::oid::text || ':' || d.objid::text FROM pg_catalog.pg_depend d
+                        WHERE d.deptype = 'e' AND d.refobjid = v_extension);
+    FOR v_table IN SELECT t.tablename FROM tgsis.model_tables t
+                    WHERE t.chunkcolumn IS NOT NULL AND to_regclass(format('tgsis.%I', t.tablename)) IS NOT NULL
+                    ORDER BY t.model, t.iudorder, t.tablename LOOP
+        CONTINUE WHEN tgsis.stored_in_chunks(v_table);
+        BEGIN
+            PERFORM tgsis.store_in_chunks(v_table);
+        EXCEPTION WHEN SQLSTATE 'TG100' OR dependent_objects_still_exist THEN
+            GET STACKED DIAGNOSTICS v_detail = MESSAGE_TEXT;
+            RAISE WARNING 'tgsis.% stays stored as rows: %', quote_ident(v_table), v_detail
+                USING DETAIL = 'The upgrade stores model 1 in chunks (docs/storage.md); this table could not be switched, nothing of it changed.',
+                      HINT = format('in psql, as tgsis''s owner, once the cause is gone (a view of yours dropped, the partitioning undone): SELECT tgsis.store_in_chunks(%L)', v_table);
+        END;
+    END LOOP;
+    FOR v_object IN
+        SELECT o.type, o.identity
+          FROM pg_catalog.pg_depend d, LATERAL pg_catalog.pg_identify_object(d.classid, d.objid, d.objsubid) o
+         WHERE d.deptype = 'e' AND d.refobjid = v_extension
+           AND (d.classid::oid::text || ':' || d.objid::text) <> ALL (v_members)
+         ORDER BY CASE WHEN o.type IN ('table', 'view', 'sequence') THEN 0 WHEN o.type = 'type' THEN 1 ELSE 2 END,
+                  o.identity LIKE '%[]'
+    LOOP
+        IF EXISTS (SELECT FROM pg_catalog.pg_depend d, LATERAL pg_catalog.pg_identify_object(d.classid, d.objid, d.objsubid) o
+                    WHERE d.deptype = 'e' AND d.refobjid = v_extension AND o.type = v_object.type AND o.identity = v_object.identity) THEN
+            EXECUTE format('ALTER EXTENSION tgsis DROP %s %s', v_object.type, v_object.identity);
+        END IF;
+    END LOOP;
+END
+$chunks$;
+
 -- ---- the installation record (last)
 INSERT INTO tgsis.installation (version, method, fingerprint)
 VALUES ('@TGSIS_VERSION@',

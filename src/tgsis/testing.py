@@ -298,14 +298,14 @@ STORAGE_MARK = "storage"
 
 
 def default_storage() -> str:
-    """The storage of the tests without the mark ``storage``: ``$TGSIS_TEST_STORAGE``, else ``rows``.
+    """The storage of the tests without the mark ``storage``: ``$TGSIS_TEST_STORAGE``, else ``chunks``.
 
     Raises
     ------
     pytest.UsageError
         ``$TGSIS_TEST_STORAGE`` names no storage of :data:`STORAGES`.
     """
-    value = os.environ.get("TGSIS_TEST_STORAGE") or "rows"
+    value = os.environ.get("TGSIS_TEST_STORAGE") or "chunks"
     if value not in STORAGES:
         raise pytest.UsageError(f"TGSIS_TEST_STORAGE={value!r} names no storage: use one of {', '.join(STORAGES)}")
     return value
@@ -340,16 +340,7 @@ def pytest_configure(config: pytest.Config) -> None:
 
 def _install_template(conn: psycopg.Connection[Any], method: Literal["extension", "sql"], storage: str) -> str:
     """Install tgsis into a template database with model 1 stored in ``storage``; the route taken."""
-    result = install(conn, method=method)
-    if storage == "chunks":
-        # the storage switch of issue 40 (sql/chunks/store_in_chunks.sql): every table registered for chunks
-        # is stored in chunks in every database cloned from the template
-        with conn.transaction():
-            conn.execute(
-                "SELECT tgsis.store_in_chunks(tablename) FROM tgsis.model_tables"
-                " WHERE chunkcolumn IS NOT NULL ORDER BY model, iudorder, tablename"
-            )
-    return result.method
+    return install(conn, method=method, storage="rows" if storage == "rows" else "chunks").method
 
 
 @pytest.fixture(scope="session")

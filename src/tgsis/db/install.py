@@ -41,6 +41,7 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
+Storage = Literal["chunks", "rows"]
 Method = Literal["auto", "extension", "sql"]
 
 # Serialises install/upgrade/uninstall of tgsis within one database.
@@ -398,6 +399,29 @@ def _upgrade(
     )
 
 
+def _storage_steps(conn: psycopg.Connection[Any], storage: Storage) -> list[str]:
+    """What an install or upgrade made of the tables registered for chunks: lines, none before chunks (0.2.0)."""
+    if conn.execute("SELECT to_regprocedure('tgsis.stored_in_chunks(text)') IS NULL").fetchone() == (True,):
+        return []
+    row = conn.execute(
+        "SELECT array_agg(t.tablename::text ORDER BY t.model, t.iudorder, t.tablename)"
+        "         FILTER (WHERE tgsis.stored_in_chunks(t.tablename)),"
+        "       array_agg(t.tablename::text ORDER BY t.model, t.iudorder, t.tablename)"
+        "         FILTER (WHERE NOT tgsis.stored_in_chunks(t.tablename))"
+        "  FROM tgsis.model_tables t WHERE t.chunkcolumn IS NOT NULL"
+    ).fetchone()
+    if row is None:
+        return []
+    chunked, rows = list(row[0] or []), list(row[1] or [])
+    steps = []
+    if chunked:
+        steps.append(f"stored in chunks: {', '.join(chunked)} (docs/storage.md)")
+    if rows:
+        why = "storage='rows'" if storage == "rows" else "the upgrade's warnings say why"
+        steps.append(f"stored as rows: {', '.join(rows)} ({why})")
+    return steps
+
+
 _TGSIS_ROLES = ("tgsis_reader", "tgsis_editor", "tgsis_admin", "tgsis_nobody")
 
 
@@ -445,6 +469,7 @@ def install(
     *,
     method: Method = "auto",
     sources: ExtensionSources | None = None,
+    storage: Storage = "chunks",
 ) -> InstallResult:
     """Install or upgrade tgsis in the connected database.
 
@@ -468,6 +493,14 @@ def install(
         files for this version and the role may use them, else the plain SQL.
     sources : ExtensionSources, optional
         The SQL to install; by default the sources shipped with this client.
+    storage : {"chunks", "rows"}
+        How the model tables registered for chunks (model 1's vertices and
+        simplices, docs/storage.md) are stored when this call creates them,
+        and whether an upgrade switches those of an older version to chunks
+        (``"rows"`` keeps rows). Set for the call's transaction as the
+        setting ``tgsis.storage``, which both routes read
+        (``tgsis.chosen_storage``). An installed database is left as it is:
+        ``SELECT tgsis.store_in_chunks('vrtx')`` switches a table later.
 
     Returns
     -------
@@ -476,7 +509,7 @@ def install(
     Raises
     ------
     InstallationError
-        Unknown method, newer version in the database, another build of the
+        Unknown method or storage, newer version in the database, another build of the
         same version, no upgrade path, a foreign ``tgsis`` schema, or missing
         extension files for ``method="extension"``.
     MissingPrivilegeError
@@ -484,12 +517,20 @@ def install(
     """
     if method not in ("auto", "extension", "sql"):
         raise InstallationError(f"unknown install method {method!r}: use 'auto', 'extension' or 'sql'")
+    if storage not in ("chunks", "rows"):
+        raise InstallationError(f"unknown storage {storage!r}: use 'chunks' or 'rows'")
     sources = sources or ExtensionSources.default()
     target = sources.version
     steps: list[str] = []
     result: tuple[str, Literal["extension", "sql"], str | None]
     with reraise(), conn.transaction():
         conn.execute(_LOCK_SQL)
+        # read by tgsis.chosen_storage (create_storage, the upgrade script) on both routes; the caller's value
+        # comes back at the end (the setting is the transaction's: a caller's transaction would keep ours)
+        row = conn.execute(
+            "SELECT current_setting('tgsis.storage', true), set_config('tgsis.storage', %s, true)", (storage,)
+        ).fetchone()
+        caller_storage = "" if row is None or row[0] is None else str(row[0])
         current = installed_version(conn)
         roles_before, extensions_before = _existing(conn)
         if current is None:
@@ -527,7 +568,10 @@ def install(
             steps.insert(0, "created the roles " + ", ".join(created))
         if required := sorted((extensions_after - extensions_before) - {EXTENSION}):
             steps.insert(0, "created the extension(s) tgsis needs: " + ", ".join(required))
+        if result[0] != "unchanged":
+            steps.extend(_storage_steps(conn, storage))
         still_needed = _make_owner_admin(conn, steps)
+        conn.execute("SELECT set_config('tgsis.storage', %s, true)", (caller_storage,))
     action, route, previous = result
     return InstallResult(action, route, target, previous, tuple(steps), still_needed)  # type: ignore[arg-type]
 

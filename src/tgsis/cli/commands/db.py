@@ -20,7 +20,7 @@ from tgsis.errors import (
 
 def cmd_db_install(args: argparse.Namespace) -> int:
     with connect(args.dsn) as conn:
-        result = install(conn, method=args.method)
+        result = install(conn, method=args.method, storage=args.storage)
     if result.action == "unchanged":
         out(
             f"tgsis {result.version} is already installed ({result.method})"
@@ -123,7 +123,11 @@ def add_db_parser(commands: Any) -> None:
         db_commands,
         "install",
         "install or upgrade tgsis (a no-op when up to date)",
-        ["tgsis db install", "tgsis db install --method sql   # managed PostgreSQL"],
+        [
+            "tgsis db install",
+            "tgsis db install --method sql   # managed PostgreSQL",
+            "tgsis db install --storage rows   # model 1 stored as rows",
+        ],
         cmd_db_install,
     )
     db_install.add_argument(
@@ -132,6 +136,13 @@ def add_db_parser(commands: Any) -> None:
         default="auto",
         help="extension: CREATE EXTENSION (needs the files on the server); "
         "sql: run the script from the client; auto: extension when available",
+    )
+    db_install.add_argument(
+        "--storage",
+        choices=("chunks", "rows"),
+        default="chunks",
+        help="how model 1's vertices and simplices are stored when created, or switched by an upgrade: "
+        "chunks (the default, docs/storage.md) or rows",
     )
     db_uninstall = add_command(
         db_commands,
