@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -10,6 +11,7 @@ import psycopg
 from psycopg import sql
 
 import tgsis
+from tests.storage_data import in_chunks, stored_versions
 from tgsis.db import features as F
 from tgsis.db.classes import class_of_feature
 from tgsis.mesh import Surface
@@ -200,3 +202,46 @@ MODEL1_COLUMNS = {
     "trgl": ("trglid", ["vrtxid1", "vrtxid2", "vrtxid3"]),
     "tetra": ("tetraid", ["vrtxid1", "vrtxid2", "vrtxid3", "vrtxid4"]),
 }
+
+
+# --- storage-neutral checks of what a merge writes (issue 40): rows or chunks, named through the product
+
+
+def merge_storage_state(conn: Conn) -> dict[str, list[Any]]:
+    """Every stored version of the model tables vrtx, trgl, geometry (rows or chunk versions, through
+    ``tgsis.storage_table``), the versions and the conflicts: what "nothing written" compares (committed)."""
+    state = {t: stored_versions(conn, t) for t in ("vrtx", "trgl", "geometry")}
+    for catalog in ("versions", "conflicts"):
+        state[catalog] = conn.execute(f"SELECT * FROM tgsis.{catalog} ORDER BY 1, 2, 3").fetchall()
+    conn.commit()
+    return state
+
+
+def rewrites_same_values(conn: Conn) -> bool:
+    """Whether an ``UPDATE`` writing a row's own values back writes a new version of it (the object changed).
+
+    Rows: yes. Chunks: no, a chunk whose content is unchanged bit for bit is not written (docs/storage.md,
+    "What differs from rows").
+    """
+    return not in_chunks(conn)
+
+
+def stored_unit(conn: Conn, schema: str, table: str) -> Callable[[tuple[str, ...]], tuple[str, ...]]:
+    """The key of the stored version holding a row, from the row's key (``versioned_tables.keycolumns``, as text).
+
+    Rows: the row key itself. A model table stored in chunks: its ``tgsis.storage_key`` (the local id replaced
+    by its chunk, id div ``tgsis.model_tables.chunksize``), so that "the rows a merge wrote" reads as "the
+    chunk versions holding them" (docs/storage.md, "What differs from rows").
+    """
+    row = conn.execute(
+        "SELECT v.keycolumns, tgsis.storage_key(v), m.chunksize FROM tgsis.versioned_tables v "
+        "LEFT JOIN tgsis.model_tables m ON v.schemaname = 'tgsis' AND m.tablename = v.tablename "
+        "WHERE v.schemaname = %s AND v.tablename = %s",
+        (schema, table),
+    ).fetchone()
+    assert row is not None, f"{schema}.{table} is not versioned"
+    keys, stored, size = list(row[0]), list(row[1]), row[2]
+    if keys == stored:
+        return lambda key: key
+    at = stored.index("chunk")
+    return lambda key: tuple(str(int(k) // int(size)) if i == at else k for i, k in enumerate(key))

@@ -9,7 +9,8 @@ import psycopg
 import pytest
 
 import tgsis
-from tests.merge_data import SIDE, curved_surface, make_fault, move, moved, stored_state
+from tests.merge_data import SIDE, curved_surface, make_fault, merge_storage_state, move, moved, stored_state
+from tests.storage_data import storage_of
 from tgsis.cli import main
 
 Conn = psycopg.Connection[Any]
@@ -21,20 +22,6 @@ SOUTH = np.arange((SIDE - 2) * SIDE, SIDE * SIDE)
 @pytest.fixture
 def fault(conn: Conn, fault_clone: int) -> int:
     return fault_clone  # make_fault's, built once (tests/conftest.py)
-
-
-def _storage(conn: Conn, table: str) -> str:
-    """Where ``tgsis.<table>``'s rows are stored (``_ver``, or the chunk table once stored in chunks), quoted."""
-    row = conn.execute("SELECT tgsis.storage_table('tgsis', %s)", (table,)).fetchone()
-    assert row is not None
-    return str(row[0])
-
-
-def _tables(conn: Conn) -> dict[str, list[Any]]:
-    tables = (*(_storage(conn, t) for t in ("vrtx", "trgl", "geometry")), "tgsis.versions")
-    state = {t: conn.execute(f"SELECT * FROM {t} ORDER BY 1, 2, 3").fetchall() for t in tables}
-    conn.commit()
-    return state
 
 
 def test_disjoint_edits_since_check_out_merge_by_region(conn: Conn, fault: int) -> None:
@@ -100,12 +87,12 @@ def test_overlapping_edits_refuse_naming_the_regions_and_nothing_is_written(conn
     conn.commit()
     mine = co.mesh.copy()
     mine.vertices[[50, 51, 52], 2] += 5.0
-    before = _tables(conn)
+    before = merge_storage_state(conn)
     with pytest.raises(tgsis.CheckoutConflictError, match=r"region 0: .*vertices") as caught:
         tgsis.checkin(conn, co, mine, on_conflict="merge")
     conn.rollback()
     assert "52" in str(caught.value) and "box" in str(caught.value)
-    assert _tables(conn) == before
+    assert merge_storage_state(conn) == before
 
 
 def test_unchanged_since_check_out_is_a_plain_check_in(conn: Conn, fault: int) -> None:
@@ -210,11 +197,11 @@ def test_both_renamed_differently_refuses_and_writes_nothing(conn: Conn, fault: 
     conn.commit()
     mine = co.mesh.copy()
     mine.vertices[NORTH, 2] += 1.0
-    before = _tables(conn)
+    before = merge_storage_state(conn)
     with pytest.raises(tgsis.CheckoutConflictError, match="name"):
         tgsis.checkin(conn, co, mine, name="mine", on_conflict="merge")
     conn.rollback()
-    assert _tables(conn) == before
+    assert merge_storage_state(conn) == before
 
 
 def _class_with_a_feature_property(conn: Conn) -> int:
@@ -233,11 +220,11 @@ def test_a_feature_property_both_changed_refuses_and_writes_nothing(conn: Conn) 
     conn.commit()
     mine = co.mesh.copy()
     mine.vertices[NORTH, 2] += 1.0
-    before = _tables(conn)
+    before = merge_storage_state(conn)
     with pytest.raises(tgsis.CheckoutConflictError, match="status"):
         tgsis.checkin(conn, co, mine, {"status": "rejected"}, on_conflict="merge")
     conn.rollback()
-    assert _tables(conn) == before
+    assert merge_storage_state(conn) == before
     assert conn.execute("SELECT status FROM public.wells WHERE _geoid = %s", (geoid,)).fetchone() == ("approved",)
 
 
@@ -389,7 +376,7 @@ def test_vertices_and_triangles_reordered_by_the_tool_keep_their_rows(conn: Conn
         vertex_properties={"porosity": base.vertex_properties["porosity"][order]},
         cell_properties={"facies": base.cell_properties["facies"][::-1]},
     )
-    trgl = _storage(conn, "trgl")
+    trgl = storage_of(conn, "trgl")
     before = conn.execute(f"SELECT count(*) FROM {trgl}").fetchone()
     result = tgsis.checkin(conn, co, mine, on_conflict="merge")
     conn.commit()

@@ -9,7 +9,7 @@ import psycopg
 import pytest
 
 import tgsis
-from tests.merge_data import SIDE, curved_surface, move, moved, stored_state
+from tests.merge_data import SIDE, curved_surface, merge_storage_state, move, moved, stored_state
 from tests.roles import login_roles
 
 Conn = psycopg.Connection[Any]
@@ -23,13 +23,6 @@ PARENT_SHIFT = (4.4, -0.5, 1.03)
 @pytest.fixture
 def fault(conn: Conn, fault_clone: int) -> int:
     return fault_clone  # make_fault's, built once (tests/conftest.py)
-
-
-def _tables(conn: Conn) -> dict[str, list[Any]]:
-    tables = ("tgsis.vrtx_ver", "tgsis.trgl_ver", "tgsis.geometry_ver", "tgsis.versions", "tgsis.conflicts")
-    state = {t: conn.execute(f"SELECT * FROM {t} ORDER BY 1, 2, 3").fetchall() for t in tables}
-    conn.commit()
-    return state
 
 
 def test_disjoint_edits_refresh_into_the_union_and_the_parent_is_unchanged(conn: Conn, fault: int) -> None:
@@ -61,21 +54,21 @@ def test_an_unsolved_region_refuses_the_refresh_and_nothing_changes(conn: Conn, 
     move(conn, "e1", fault, [50, 51, 52], (0.0, 0.0, 5.0))
     move(conn, "DEFAULT", fault, [52, 53], (0.0, 0.0, -4.0))
     conn.commit()
-    before = _tables(conn)
+    before = merge_storage_state(conn)
     with pytest.raises(tgsis.UnsolvedConflictsError, match=rf"feature {fault}: region 0 unsolved"):
         tgsis.refresh_version(conn, "e1")
-    assert _tables(conn) == before
+    assert merge_storage_state(conn) == before
 
 
 def test_a_role_that_may_not_write_in_the_version_cannot_refresh(conn: Conn, fault: int, db_dsn: str) -> None:
     move(conn, "e1", fault, NORTH, CHILD_SHIFT)
     move(conn, "DEFAULT", fault, SOUTH, PARENT_SHIFT)
     conn.commit()
-    before = _tables(conn)
+    before = merge_storage_state(conn)
     with login_roles(db_dsn, {"rita": "tgsis_reader"}) as made:
         with pytest.raises(tgsis.MissingPrivilegeError, match="refresh"):
             tgsis.refresh_version(made.connect("rita"), "e1")
-    assert _tables(conn) == before
+    assert merge_storage_state(conn) == before
 
 
 def test_a_caller_repeatable_read_transaction_is_refused(conn: Conn, fault: int) -> None:

@@ -409,6 +409,7 @@ def test_a_psql_solution_with_rows_for_a_region_of_an_instant_is_taken_and_merge
 # ---------------------------------------------------------------------------- negative ids
 
 
+@pytest.mark.storage("rows")  # chunks refuse negative ids by design (docs/storage.md, "What differs from rows")
 @pytest.mark.parametrize("new_id", [-1, -5, -(2**62)])
 def test_a_negative_vertex_id_a_psql_user_stored_merges_exactly_as_in_python_model1(
     conn: Conn, fault_clone: int, new_id: int

@@ -23,6 +23,7 @@ from psycopg import sql
 
 import tgsis
 from tests.merge_data import SIDE, curved_surface, move, moved, stored_state
+from tests.storage_data import storage_of
 from tests.test_sql_merge_regions import MIDDLE, NORTH, SOUTH, _apply, _edit, property_tables, psql
 
 Conn = psycopg.Connection[Any]
@@ -461,7 +462,7 @@ def test_two_psql_sessions_merging_and_refreshing_at_once(conn: Conn, fault: int
     # the merge wrote what the Python merge writes; the refresh after it found nothing to bring
     after = everything(conn)
     conn.commit()
-    for table in ("tgsis.vrtx_ver", "tgsis.trgl_ver"):
+    for table in (storage_of(conn, "vrtx"), storage_of(conn, "trgl")):  # rows or chunk versions
         assert after[table] == theirs[2][table], table
 
 

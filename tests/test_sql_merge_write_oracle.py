@@ -471,11 +471,14 @@ def test_regions_stored_unsolved_then_the_overlap_undone_merge_as_in_python(conn
     assert conn.execute("SELECT count(*) FROM tgsis.conflict_regions WHERE conflict").fetchone() == (1,)
     conn.commit()
     move(conn, "e1", fault, [64, 65, 66], (0.0, 0.0, -5.0))  # back where they were (up to rounding)
+    # the stored row versions of revision 0 (<table>_ver, or the decoded chunk versions)
+    (stored,) = conn.execute("SELECT tgsis.storage_row_versions('tgsis', 'vrtx')").fetchone()  # type: ignore[misc]
+    conn.commit()
     psql(
         conn,
         "e1",
         (
-            "UPDATE tgsis.vrtx v SET z = b.z FROM tgsis.vrtx_ver b WHERE v.geoid = %s AND v.vrtxid IN (64, 65, 66)"
+            f"UPDATE tgsis.vrtx v SET z = b.z FROM {stored} b WHERE v.geoid = %s AND v.vrtxid IN (64, 65, 66)"
             " AND b.geoid = v.geoid AND b.vrtxid = v.vrtxid AND b.revision = 0",
             (fault,),
         ),

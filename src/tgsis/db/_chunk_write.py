@@ -39,7 +39,7 @@ def last_id(conn: Conn, table: str, alias: str = "c") -> sql.Composable:
     """The last present id of a chunk version ``alias`` of ``tgsis.<table>_chunk``, as an SQL expression.
 
     A chunk version's arrays end at its last present slot, so its last id is
-    ``chunk * chunksize + length - 1`` (of the first array, or of its
+    ``chunk * chunksize + (length - 1)`` (of the first array, or of its
     ``_wide`` twin when the chunk's vertex ids are absolute): no decoding.
     """
     # the layout from the catalog, which every role may read (tgsis.chunk_columns is internal)
@@ -55,7 +55,8 @@ def last_id(conn: Conn, table: str, alias: str = "c") -> sql.Composable:
             sql.Identifier(name), sql.Identifier(f"{name}_wide"), a=a
         )
     )
-    return sql.SQL("({}.chunk * {} + {} - 1)").format(a, sql.Literal(int(size)), length)
+    # (length - 1) first: the last slot of the last chunk is id 2**63 - 1, and chunk * size + length is 2**63
+    return sql.SQL("({}.chunk * {} + ({} - 1))").format(a, sql.Literal(int(size)), length)
 
 
 def next_id(conn: Conn, table: str, geoid: int) -> int:
