@@ -212,6 +212,28 @@ def test_the_face_keeps_its_rights_for_roles_with_fewer(db_dsn: str, conn: Conn,
             reader.rollback()
 
 
+def test_direct_chunk_inserts_are_still_checked_once_partitioned(db_dsn: str, conn: Conn, horizons: Any) -> None:
+    """The insert check (tgsis_chunk_insert) is made again on the partitioned chunk table, not dropped with the old one."""
+    geoid = tgsis.insert_feature(conn, horizons, _grid(5))
+    conn.commit()
+    tgsis.partition_model_storage(conn, 1, PARTITIONS)
+    assert [t for t in _triggers(conn, "tgsis.vrtx_chunk") if "chunk_insert_check" in t]
+    with login_roles(db_dsn, {"ed": "tgsis_editor"}) as roles:
+        editor = roles.connect("ed")
+        # x has 2 elements, y and z 1: readers would decode it differently
+        with pytest.raises(psycopg.errors.CheckViolation):
+            editor.execute(
+                "INSERT INTO tgsis.vrtx_chunk (geoid, chunk, revision, x, y, z) VALUES (%s, 5, 0, '{1,2}', '{1}', '{1}')",
+                (geoid,),
+            )
+        editor.rollback()
+        editor.execute(  # a well-formed chunk goes in (the client's upload is this right)
+            "INSERT INTO tgsis.vrtx_chunk (geoid, chunk, revision, x, y, z) VALUES (%s, 6, 0, '{1}', '{2}', '{3}')",
+            (geoid,),
+        )
+        editor.rollback()
+
+
 @pytest.mark.parametrize(
     ("create", "user"),
     [
