@@ -22,7 +22,14 @@ Every side runs in turn within each repetition (drift hits all alike),
 medians of ``--repeat``. Storage: ``pg_total_relation_size`` of each table
 (heap, TOAST, indexes) and ``pg_indexes_size`` of each.
 
-    python bench/peers.py [--side 1000] [--repeat 3] [--versioned]
+Model 1 is stored as tgsis installs it (chunks by default since issue 40;
+``--storage rows`` for the row tables): truncations and sizes go through
+``tgsis.storage_table``, so each figure is of the storage in use. Issue 40's
+figures are printed beside: bytes per vertex, the download and upload
+against the ``bytea`` row, and one vertex read by key through the view
+``tgsis.vrtx`` (what a psql user types) and through ``tgsis.vertex``.
+
+    python bench/peers.py [--side 1000] [--repeat 3] [--versioned] [--storage chunks|rows]
 """
 
 from __future__ import annotations
@@ -61,6 +68,7 @@ def main() -> None:
     parser.add_argument("--side", type=int, default=1000)
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--versioned", action="store_true", help="feature versioning on (rows go to _ver storage)")
+    parser.add_argument("--storage", choices=("chunks", "rows"), default="chunks", help="model 1's storage")
     args = parser.parse_args()
 
     surface = grid_surface(args.side)
@@ -73,12 +81,19 @@ def main() -> None:
         with psycopg.connect(server.dsn(), autocommit=True) as admin:
             admin.execute("CREATE DATABASE bench")
         conn = psycopg.connect(server.dsn("bench"))
-        tgsis.install(conn, method="sql")
+        tgsis.install(conn, method="sql", storage=args.storage)
         conn.execute("CREATE EXTENSION postgis")
         print("PostGIS", conn.execute("SELECT postgis_lib_version()").fetchone()[0])  # type: ignore[index]
         F.create_feature_class(conn, "horizon", "SURFACE", cell_properties={"porosity": "double precision"})
         if args.versioned:
             tgsis.enable_feature_versioning(conn)
+        conn.commit()
+        # the relations that hold model 1's rows and the property rows: chunk tables, _ver tables or the tables
+        tables = [
+            tgsis.storage_table(conn, s, t)
+            for s, t in (("tgsis", "vrtx"), ("tgsis", "trgl"), ("public", "horizon_cellpros"))
+        ]
+        print("storage:", ", ".join(tables))
         conn.execute("CREATE TABLE tin_peer (id int PRIMARY KEY, geom geometry(TINZ))")
         conn.execute("CREATE TABLE bytea_peer (id int PRIMARY KEY, vertices bytea, triangles bytea, porosity bytea)")
         for column in ("vertices", "triangles", "porosity"):  # the raw bytes: out of line, not compressed
@@ -129,11 +144,8 @@ def main() -> None:
         state: dict[str, Any] = {}
 
         def tgsis_up() -> None:
-            conn.execute(
-                "TRUNCATE tgsis.vrtx, tgsis.trgl, horizon_cellpros, horizon, tgsis.geometry CASCADE"
-                if not args.versioned
-                else "SELECT 1"
-            )
+            if not args.versioned:
+                conn.execute(f"TRUNCATE {', '.join(tables)}, horizon, tgsis.geometry CASCADE")
             if args.versioned and "geoid" in state:
                 F.delete_feature(conn, "horizon", state["geoid"])
             conn.commit()
@@ -191,6 +203,23 @@ def main() -> None:
         assert fetched["checkout"].same_as(surface), "checkout: surface differs from the uploaded one"
         assert np.array_equal(fetched["bytea"].vertices, surface.vertices)
         assert fetched["postgis"].n_cells == m, "PostGIS: triangle count differs"
+        # one vertex by key, as a psql user asks it of the view, and through tgsis.vertex (warm, medians)
+        probe = int(n // 2 + 17)
+        expected = tuple(float(c) for c in surface.vertices[probe])
+
+        def by_view() -> None:
+            row = conn.execute(
+                "SELECT x, y, z FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = %s", (state["geoid"], probe)
+            ).fetchone()
+            assert row == expected, row
+            conn.commit()
+
+        def by_function() -> None:
+            row = conn.execute("SELECT x, y, z FROM tgsis.vertex(%s, %s)", (state["geoid"], probe)).fetchone()
+            assert row == expected, row
+            conn.commit()
+
+        keyed = paired([by_view, by_function], max(args.repeat, 5))
         # what narrower rows would store: int4 local ids, columns ordered for alignment (same keys)
         conn.execute("CREATE TABLE narrow_vrtx AS SELECT geoid, x, y, z, vrtxid::int4 AS vrtxid FROM tgsis.vrtx")
         conn.execute(
@@ -204,9 +233,6 @@ def main() -> None:
         conn.commit()
         conn.autocommit = True
         conn.execute("VACUUM")
-        tables = ["tgsis.vrtx", "tgsis.trgl", "horizon_cellpros"]
-        if args.versioned:
-            tables = [t + "_ver" for t in tables]
         narrow = ["narrow_vrtx", "narrow_trgl", "narrow_prop"]
         stored = sizes(conn, [*tables, *narrow, "tin_peer", "bytea_peer"])
         conn.close()
@@ -247,6 +273,11 @@ def main() -> None:
     print(f"narrow_bytes: {narrow_bytes}")
     print(f"narrow_storage_vs_tin: {narrow_bytes / stored['tin_peer'][0]:.2f}")
     print(f"keyed_copy_vs_postgis: {ups[3] / ups[1]:.2f}")
+    print(f"one_vertex_by_view_ms: {keyed[0] * 1e3:.2f}")
+    print(f"one_vertex_by_function_ms: {keyed[1] * 1e3:.3f}")
+    print(f"bytes_per_vertex: {tgsis_bytes / n:.1f}")
+    print(f"bytes_per_vertex_without_property: {sum(stored[t][0] for t in tables[:2]) / n:.1f}")
+    print(f"upload_vs_bytea: {ups[0] / ups[2]:.2f}")
 
 
 if __name__ == "__main__":

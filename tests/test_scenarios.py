@@ -324,11 +324,21 @@ def test_merge(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) 
     assert both.vertices.tobytes() == expected.tobytes()
     assert "bit for bit, every other vertex and every triangle as in release 5.3: yes" in out
     # ... writing into DEFAULT only bob's rows (a closed and a new one per moved vertex, and the fault's box),
-    # never ann's again, which DEFAULT holds already
+    # never ann's again, which DEFAULT holds already; in chunks, the chunk versions holding them (each chunk
+    # written whole: docs/storage.md, "What differs from rows")
     into_south_tip = 2 * len(a) + 1
+    with psycopg.connect(make_conninfo(db_dsn, dbname="tgsis_demo_merge")) as conn:
+        row = conn.execute(
+            "SELECT tgsis.stored_in_chunks('vrtx'), chunksize FROM tgsis.model_tables WHERE tablename = 'vrtx'"
+        ).fetchone()
+    assert row is not None
+    chunked, chunksize = bool(row[0]), int(row[1])
+    # in chunks: each vertex chunk bob's moves are in, closed and written anew, and the fault's box
+    into_default = 2 * len(np.unique(b // chunksize)) + 2 if chunked else 2 * len(b) + 2
+    unit = "chunk versions" if chunked else "rows"
     assert (
         f"{into_south_tip} rows written into south_tip (the merged fault, by id: ann's moves), then "
-        f"{2 * len(b) + 2} into DEFAULT (only what it did not hold: bob's moves, "
+        f"{into_default} {unit} into DEFAULT (only what it did not hold: bob's moves, "
     ) in out
 
     # the merge of north_review: one conflict region, exactly ann's and cat's moved vertices and the triangles

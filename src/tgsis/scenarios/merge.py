@@ -369,9 +369,20 @@ def run(context: Context) -> None:
     base_ids, base_xyz = _vertices(conn, geoid, "DEFAULT", base_revision)
     base_triangles = _triangles(conn, geoid, "DEFAULT", base_revision)
 
+    # what merge_version counts in the parent: rows, or chunk versions where model 1 is stored in chunks (each
+    # chunk a changed vertex or triangle is in, written whole: docs/storage.md, "What differs from rows"); the
+    # rows a merge by region writes into the version are rows on both storages
+    chunked = conn.execute("SELECT tgsis.stored_in_chunks('vrtx')").fetchone() == (True,)
+    unit = "chunk versions" if chunked else "rows"
+    held = (
+        "the chunks holding them, each written whole, and the fault's box"
+        if chunked
+        else "a row closed and one written per vertex, and the fault's box"
+    )
+
     # 3. ann merges first: DEFAULT had not changed the fault
     rows = tgsis.merge_version(conn, "north_tip")
-    out(f"3. north_tip merged into DEFAULT (which had not changed the fault): {rows} rows written")
+    out(f"3. north_tip merged into DEFAULT (which had not changed the fault): {rows} {unit} written")
 
     # 4. bob's edit against ann's, now in DEFAULT: two disjoint regions of one mesh, merged by themselves
     out("4. south_tip: DEFAULT and south_tip both changed the fault since release_5.3")
@@ -381,10 +392,9 @@ def run(context: Context) -> None:
         out(
             f"   merged by region ({merged_object.how}, {merged_object.regions} regions): "
             f"{merged_object.rows_written} rows written into south_tip (the merged fault, by id: ann's moves), then "
-            f"{int(result) - merged_object.rows_written} into DEFAULT (only what it did not hold: bob's moves, "
-            f"a row closed and one written per vertex, and the fault's box); {int(result)} in all, for "
-            f"{len(ann.moved) + len(bob.moved)} vertices moved (the whole fault written again: "
-            f"{2 * fault.mesh.n_vertices + fault.mesh.n_cells} rows)"
+            f"{int(result) - merged_object.rows_written} {unit} into DEFAULT (only what it did not hold: bob's "
+            f"moves, {held}), for {len(ann.moved) + len(bob.moved)} vertices moved (the whole fault written "
+            f"again: {2 * fault.mesh.n_vertices + fault.mesh.n_cells} rows)"
         )
     context.figure("south_tip_rows", int(result))
     both = save_revision(conn, "both_tips")
@@ -463,9 +473,11 @@ def run(context: Context) -> None:
         ).format(sql.Literal("north_review")),
     )
     result = tgsis.merge_version(conn, "north_review")
+    by_region = sum(m.rows_written for m in result.objects)
     out(
-        f"   north_review merged: {int(result)} rows written"
-        + "".join(f" ({m.rows_written} into north_review by region, {m.how})" for m in result.objects)
+        f"   north_review merged: {by_region} rows written into north_review by region"
+        + "".join(f" ({m.how})" for m in result.objects)
+        + f", then {int(result) - by_region} {unit} into DEFAULT"
     )
     _, final = _vertices(conn, geoid, "DEFAULT")
     _, both_xyz = _vertices(conn, geoid, "DEFAULT", both)
