@@ -46,6 +46,7 @@ from transfer import grid_surface
 import tgsis
 from tgsis.db import checkin as C
 from tgsis.db import features as F
+from tgsis.db import versions as V
 from tgsis.db.copy import encode_rows
 from tgsis.db.local import LocalServer, find_binaries
 from tgsis.postgis import mesh_from_wkb, mesh_to_ewkb
@@ -90,7 +91,7 @@ def main() -> None:
         conn.commit()
         # the relations that hold model 1's rows and the property rows: chunk tables, _ver tables or the tables
         tables = [
-            tgsis.storage_table(conn, s, t)
+            V.storage_table(conn, s, t)
             for s, t in (("tgsis", "vrtx"), ("tgsis", "trgl"), ("public", "horizon_cellpros"))
         ]
         print("storage:", ", ".join(tables))

@@ -36,8 +36,6 @@ DECLARE
     v_refs    text[];
     v_defs    text[] := '{}';
     v_c       record;
-    v_acl     record;
-    v_pol     record;
     v_key     text;
 BEGIN
     SELECT * INTO v_reg FROM tgsis.model_tables t WHERE t.tablename = p_table;
@@ -121,29 +119,7 @@ BEGIN
     END IF;
 
     -- the rights of the row table's storage (its grants; its row-level security, policies and their comments)
-    FOR v_acl IN SELECT a.grantee, a.privilege_type, a.is_grantable
-                   FROM pg_class c, aclexplode(c.relacl) AS a
-                  WHERE c.oid = v_storage AND a.grantee <> c.relowner LOOP
-        EXECUTE format('GRANT %s ON %s TO %s%s', v_acl.privilege_type, v_chunk,
-                       CASE WHEN v_acl.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_acl.grantee)) END,
-                       CASE WHEN v_acl.is_grantable THEN ' WITH GRANT OPTION' ELSE '' END);
-    END LOOP;
-    IF (SELECT c.relrowsecurity FROM pg_class c WHERE c.oid = v_storage) THEN
-        EXECUTE format('ALTER TABLE %s ENABLE ROW LEVEL SECURITY', v_chunk);
-    END IF;
-    FOR v_pol IN SELECT p.oid, p.polname, p.polpermissive, p.polcmd, p.polroles,
-                        pg_get_expr(p.polqual, p.polrelid) AS qual, pg_get_expr(p.polwithcheck, p.polrelid) AS withcheck
-                   FROM pg_policy p WHERE p.polrelid = v_storage ORDER BY p.polname LOOP
-        EXECUTE format('CREATE POLICY %I ON %s AS %s FOR %s TO %s%s%s', v_pol.polname, v_chunk,
-                       CASE WHEN v_pol.polpermissive THEN 'PERMISSIVE' ELSE 'RESTRICTIVE' END,
-                       CASE v_pol.polcmd WHEN 'r' THEN 'SELECT' WHEN 'a' THEN 'INSERT' WHEN 'w' THEN 'UPDATE'
-                                         WHEN 'd' THEN 'DELETE' ELSE 'ALL' END,
-                       (SELECT string_agg(CASE WHEN r = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(r)) END, ', ')
-                          FROM unnest(v_pol.polroles) AS r),
-                       CASE WHEN v_pol.qual IS NOT NULL THEN format(' USING (%s)', v_pol.qual) ELSE '' END,
-                       CASE WHEN v_pol.withcheck IS NOT NULL THEN format(' WITH CHECK (%s)', v_pol.withcheck) ELSE '' END);
-        EXECUTE format('COMMENT ON POLICY %I ON %s IS %L', v_pol.polname, v_chunk, obj_description(v_pol.oid, 'pg_policy'));
-    END LOOP;
+    PERFORM tgsis.copy_relation_rights(v_storage, v_chunk);
     -- what the roles that keep INSERT (the client's COPY upload) write is checked (tgsis.chunk_insert_check)
     PERFORM tgsis.create_chunk_insert_trigger(p_table, v_chunk);
     RETURN v_chunk;

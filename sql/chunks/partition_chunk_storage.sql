@@ -45,8 +45,6 @@ DECLARE
     v_names     text[];
     v_defs      text[];
     v_index     record;
-    v_acl       record;
-    v_pol       record;
     v_cols      text;
     v_sends     text;
     v_n         bigint;
@@ -144,32 +142,10 @@ BEGIN
                        format('partition %s of %s of tgsis.%s (hash of geoid; partition_model_storage)',
                               v_r + 1, p_partitions, v_name));
     END LOOP;
-    FOR v_acl IN SELECT a.grantee, a.privilege_type, a.is_grantable
-                   FROM pg_class c, aclexplode(c.relacl) AS a
-                  WHERE c.oid = v_chunk AND a.grantee <> c.relowner LOOP
-        EXECUTE format('GRANT %s ON %s TO %s%s', v_acl.privilege_type, v_new,
-                       CASE WHEN v_acl.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_acl.grantee)) END,
-                       CASE WHEN v_acl.is_grantable THEN ' WITH GRANT OPTION' ELSE '' END);
-    END LOOP;
-    IF (SELECT c.relrowsecurity FROM pg_class c WHERE c.oid = v_chunk) THEN
-        EXECUTE format('ALTER TABLE %s ENABLE ROW LEVEL SECURITY', v_new);
-    END IF;
+    PERFORM tgsis.copy_relation_rights(v_chunk, v_new);
     IF (SELECT c.relforcerowsecurity FROM pg_class c WHERE c.oid = v_chunk) THEN
         EXECUTE format('ALTER TABLE %s FORCE ROW LEVEL SECURITY', v_new);
     END IF;
-    FOR v_pol IN SELECT p.oid, p.polname, p.polpermissive, p.polcmd, p.polroles,
-                        pg_get_expr(p.polqual, p.polrelid) AS qual, pg_get_expr(p.polwithcheck, p.polrelid) AS withcheck
-                   FROM pg_policy p WHERE p.polrelid = v_chunk ORDER BY p.polname LOOP
-        EXECUTE format('CREATE POLICY %I ON %s AS %s FOR %s TO %s%s%s', v_pol.polname, v_new,
-                       CASE WHEN v_pol.polpermissive THEN 'PERMISSIVE' ELSE 'RESTRICTIVE' END,
-                       CASE v_pol.polcmd WHEN 'r' THEN 'SELECT' WHEN 'a' THEN 'INSERT' WHEN 'w' THEN 'UPDATE'
-                                         WHEN 'd' THEN 'DELETE' ELSE 'ALL' END,
-                       (SELECT string_agg(CASE WHEN r = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(r)) END, ', ')
-                          FROM unnest(v_pol.polroles) AS r),
-                       CASE WHEN v_pol.qual IS NOT NULL THEN format(' USING (%s)', v_pol.qual) ELSE '' END,
-                       CASE WHEN v_pol.withcheck IS NOT NULL THEN format(' WITH CHECK (%s)', v_pol.withcheck) ELSE '' END);
-        EXECUTE format('COMMENT ON POLICY %I ON %s IS %L', v_pol.polname, v_new, obj_description(v_pol.oid, 'pg_policy'));
-    END LOOP;
 
     -- the chunk versions, moved and verified: the same rows, each column by its send form (doubles bit for bit)
     EXECUTE format('INSERT INTO %s (%s) SELECT %s FROM %s', v_new, v_cols, v_cols, v_chunk);
