@@ -50,7 +50,6 @@ DECLARE
     v_n         bigint;
     v_diff      bigint;
     v_new       regclass;
-    v_r         integer;
 BEGIN
     IF NOT tgsis.stored_in_chunks(p_table) THEN
         RAISE EXCEPTION 'tgsis.% is not stored in chunks', quote_ident(p_table)
@@ -134,14 +133,7 @@ BEGIN
     v_new := format('tgsis.%I', v_name)::regclass;
     EXECUTE format('ALTER TABLE %s OWNER TO %I', v_new, v_owner);
     EXECUTE format('COMMENT ON TABLE %s IS %L', v_new, v_comment);
-    FOR v_r IN 0 .. p_partitions - 1 LOOP
-        EXECUTE format('CREATE TABLE tgsis.%I PARTITION OF %s FOR VALUES WITH (MODULUS %s, REMAINDER %s)',
-                       v_name || '_p' || v_r, v_new, p_partitions, v_r);
-        EXECUTE format('ALTER TABLE tgsis.%I OWNER TO %I', v_name || '_p' || v_r, v_owner);
-        EXECUTE format('COMMENT ON TABLE tgsis.%I IS %L', v_name || '_p' || v_r,
-                       format('partition %s of %s of tgsis.%s (hash of geoid; partition_model_storage)',
-                              v_r + 1, p_partitions, v_name));
-    END LOOP;
+    PERFORM tgsis.create_hash_partitions(v_name, p_partitions, v_owner);
     PERFORM tgsis.copy_relation_rights(v_chunk, v_new);
     IF (SELECT c.relforcerowsecurity FROM pg_class c WHERE c.oid = v_chunk) THEN
         EXECUTE format('ALTER TABLE %s FORCE ROW LEVEL SECURITY', v_new);

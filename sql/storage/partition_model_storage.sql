@@ -49,7 +49,6 @@ DECLARE
     v_defs    text[];
     v_rows    boolean;
     v_new     regclass;
-    v_r       integer;
     v_cost    bigint;
     v_fixed   bigint;
     v_room    bigint;
@@ -172,14 +171,7 @@ BEGIN
         END LOOP;
         EXECUTE format('ALTER TABLE tgsis.%I OWNER TO %I', v_table, v_owner);
         EXECUTE format('COMMENT ON TABLE tgsis.%I IS %L', v_table, v_comment);
-        FOR v_r IN 0 .. p_partitions - 1 LOOP
-            EXECUTE format('CREATE TABLE tgsis.%I PARTITION OF tgsis.%I FOR VALUES WITH (MODULUS %s, REMAINDER %s)',
-                           v_table || '_p' || v_r, v_table, p_partitions, v_r);
-            EXECUTE format('ALTER TABLE tgsis.%I OWNER TO %I', v_table || '_p' || v_r, v_owner);
-            EXECUTE format('COMMENT ON TABLE tgsis.%I IS %L', v_table || '_p' || v_r,
-                           format('partition %s of %s of tgsis.%s (hash of geoid; tgsis.partition_model_storage)',
-                                  v_r + 1, p_partitions, v_table));
-        END LOOP;
+        PERFORM tgsis.create_hash_partitions(v_table, p_partitions, v_owner);
     END LOOP;
     IF v_swapped THEN  -- the row tables made again (a chunk table keeps its own rights)
         PERFORM tgsis.grant_model_tables(p_model);

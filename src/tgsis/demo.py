@@ -35,6 +35,7 @@ from typing import Any
 
 import numpy as np
 import psycopg
+from psycopg import sql
 
 from tgsis._cfm import CfmFault, load_releases
 from tgsis.db import checkin as C
@@ -75,7 +76,8 @@ def _stored_rows(conn: psycopg.Connection[Any]) -> tuple[int, str]:
     """The stored versions of the vertices and triangles (their storage: rows, or chunk versions), and what they are."""
     count = 0
     for table in ("vrtx", "trgl"):
-        row = conn.execute(f"SELECT count(*) FROM {V.storage_table(conn, 'tgsis', table)}").fetchone()
+        storage = sql.SQL(V.storage_table(conn, "tgsis", table))  # quoted by tgsis.storage_table
+        row = conn.execute(sql.SQL("SELECT count(*) FROM {}").format(storage)).fetchone()
         assert row is not None
         count += int(row[0])
     chunked = conn.execute("SELECT tgsis.stored_in_chunks('vrtx')").fetchone() == (True,)
