@@ -48,7 +48,7 @@ SELECT c.chunk, c.revision, c.vtop,
 def _bounds(conn: Conn, geoid: int) -> list[tuple[int, int, int, int, int]]:
     rows = conn.execute(BOUNDS, (geoid,)).fetchall()
     assert rows
-    return [tuple(r) for r in rows]  # type: ignore[misc]
+    return [(int(r[0]), int(r[1]), int(r[2]), int(r[3]), int(r[4])) for r in rows]
 
 
 def _check_bounds(conn: Conn, geoid: int) -> None:
@@ -57,7 +57,7 @@ def _check_bounds(conn: Conn, geoid: int) -> None:
         assert largest <= vtop, (chunk, revision, largest, vtop)
 
 
-def _surface(spatial: bool) -> tgsis.Surface:
+def _surface(spatial: bool) -> tgsis.Mesh:
     curved = curved_surface(SIDE)
     mesh = tgsis.Surface(curved.vertices, curved.cells, name="fault")  # (the class has no property)
     if spatial:  # a Morton order: chunks span distant ids where the curve jumps
