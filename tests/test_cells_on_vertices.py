@@ -189,3 +189,40 @@ def test_the_client_bound_of_relative_wide_and_top_chunks() -> None:
     # chunk 0: vbase 10, stored 0, 4, 1 and 2, -2, 1: 10 + 2 * 4; chunk 1: its largest id; chunk 2: past the top, capped
     assert chunks.vtop.tolist() == [18, 2**40, top]
     assert all(chunks.vtop >= corners.max(axis=1)[[1, 2, 4]])
+
+
+def test_a_merge_by_region_leaves_the_geometry_row_of_the_object_s_rows(db_dsn: str) -> None:
+    """The Python merge writes part of the rows, then the box and counts (tgsis.static_extent on chunks, the faces
+    on rows): they are those of the rows through the faces, with a corner vertex moved out of the box and back in."""
+    with psycopg.connect(db_dsn) as conn:
+        F.create_feature_class(conn, "faults", "SURFACE")
+        tgsis.enable_feature_versioning(conn)
+        geoid = F.insert_feature(conn, "faults", _surface(spatial=True))
+        tgsis.create_version(conn, "e1")
+        conn.commit()
+        corner = int(np.argmax(_surface(spatial=True).vertices[:, 2]))  # the highest vertex: on the box's top
+        with tgsis.in_version(conn, "e1"):
+            conn.execute(
+                "UPDATE tgsis.vrtx SET z = z - 500.25, x = x + 7000.5 WHERE geoid = %s AND vrtxid = %s", (geoid, corner)
+            )
+        conn.commit()
+        far = (corner + SIDE * SIDE // 2) % (SIDE * SIDE)
+        with tgsis.in_version(conn, "DEFAULT"):
+            conn.execute("UPDATE tgsis.vrtx SET y = y - 0.125 WHERE geoid = %s AND vrtxid = %s", (geoid, far))
+        conn.commit()
+        tgsis.merge_version(conn, "e1")
+        conn.commit()
+        with tgsis.in_version(conn, "e1"):
+            row = conn.execute(
+                "SELECT nvrtx, ncell, cube_ll_coord(bbox, 1), cube_ll_coord(bbox, 2), cube_ll_coord(bbox, 3), "
+                "cube_ur_coord(bbox, 1), cube_ur_coord(bbox, 2), cube_ur_coord(bbox, 3) FROM tgsis.geometry WHERE geoid = %s",
+                (geoid,),
+            ).fetchone()
+            faces = conn.execute(
+                "SELECT count(*), (SELECT count(*) FROM tgsis.trgl WHERE geoid = %s), min(x), min(y), min(z), "
+                "max(x), max(y), max(z) FROM tgsis.vrtx WHERE geoid = %s",
+                (geoid, geoid),
+            ).fetchone()
+        assert row is not None and faces is not None
+        assert row == faces
+        assert row[5] > 3200  # the moved corner is the box's new east side
