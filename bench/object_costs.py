@@ -3,8 +3,8 @@
 A bumpy 1000 x 1000 grid (1,000,000 vertices, 1,996,002 triangles, one
 vertex property, ``transfer.grid_surface``) in the spatial order
 (``tgsis.mesh.spatial_order``: the order a region's ids fall in few chunks)
-is uploaded into a versioned class on the storage in use (chunks by default;
-``TGSIS_TEST_STORAGE``-like ``--storage rows`` installs rows). Version ``v``
+is uploaded into a versioned class on the storage a fresh install makes
+(chunks, model 1's default). Version ``v``
 moves a 100 x 100 patch (10,000 vertices, 1 % of them, spatially local) by
 ``z - 3``; DEFAULT moves another patch by ``z + 5`` (each written as a
 check-in writes, ``tgsis.write_object_rows``): the object changed on
@@ -34,7 +34,7 @@ write rolled back), each next to the whole-object reads of the same run:
 Each ``_s`` figure is printed with ``_vs_fetch`` (its ratio to
 ``whole_fetch_s``). The machine is shared: ratios in one run, not times.
 
-    python bench/object_costs.py [--side 1000] [--repeat 3] [--storage chunks|rows]   # TGSIS_PG=system|embedded
+    python bench/object_costs.py [--side 1000] [--repeat 3]   # TGSIS_PG=system|embedded
 """
 
 from __future__ import annotations
@@ -102,10 +102,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--side", type=int, default=1000)
     parser.add_argument("--repeat", type=int, default=3)
-    parser.add_argument("--storage", choices=("chunks", "rows"), default="chunks")
     args = parser.parse_args()
-    if args.storage == "rows":
-        os.environ["PGOPTIONS"] = (os.environ.get("PGOPTIONS", "") + " -c tgsis.storage=rows").strip()
 
     surface = tgsis.mesh.spatial_order(grid_surface(args.side))
     n = surface.n_vertices
@@ -115,7 +112,7 @@ def main() -> None:
     parent_patch = patch_ids(surface.vertices, 6_000, 6_000, width)
     with bench_database() as conn:
         storage = conn.execute("SELECT tgsis.storage_table('tgsis', 'vrtx')").fetchone()
-        print(f"storage: {args.storage} (tgsis.vrtx stored in {storage[0] if storage else '?'})")
+        print(f"storage: tgsis.vrtx stored in {storage[0] if storage else '?'}")
         F.create_feature_class(conn, "horizon", "SURFACE", cell_properties={"porosity": "double precision"})
         tgsis.enable_feature_versioning(conn)
         conn.commit()
@@ -197,7 +194,7 @@ def main() -> None:
             except psycopg.Error as error:
                 assert error.sqlstate == "TG300", error.sqlstate
 
-        if args.storage == "chunks":
+        if storage == ("tgsis.vrtx_chunk",):
             fig["write_object_rows_rr_s"] = timed(rolled_back(conn, write_rr, "REPEATABLE READ"), r)
             fig["write_object_rows_rc_s"] = timed(rolled_back(conn, lambda: conn.execute(write, wargs)), r)
         fig["sql_merge_s"] = timed(rolled_back(conn, lambda: conn.execute("SELECT tgsis.merge_version('v')")), r)
