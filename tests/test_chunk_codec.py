@@ -70,22 +70,23 @@ def via_copy(chunks: ChunkSet) -> ChunkSet:
 
 
 def _select_stream(stream: bytes, spec: ChunkColumns) -> bytes:
-    """A COPY-in stream with its geoid and revision fields removed (what a COPY of the select list sends)."""
+    """A COPY-in stream with its geoid, revision and vtop fields removed (what a COPY of the select list sends)."""
     out = bytearray(stream[:19])
     pos = 19
     n_fields = len(spec.copy_columns())
+    kept = [i for i, name in enumerate(spec.copy_columns()) if name in spec.select_columns()]
     while True:
         count = int.from_bytes(stream[pos : pos + 2], "big", signed=True)
         if count == -1:
             out += stream[pos : pos + 2]
             return bytes(out)
         assert count == n_fields
-        out += (n_fields - 2).to_bytes(2, "big", signed=True)
+        out += len(kept).to_bytes(2, "big", signed=True)
         pos += 2
         for i in range(n_fields):
             length = int.from_bytes(stream[pos : pos + 4], "big", signed=True)
             end = pos + 4 + max(length, 0)
-            if i not in (0, 2):  # geoid, revision
+            if i in kept:  # (not geoid, revision, vtop)
                 out += stream[pos:end]
             pos = end
 
@@ -261,7 +262,7 @@ def create_tables(conn: psycopg.Connection[Any]) -> None:
             geoid bigint NOT NULL, chunk bigint NOT NULL, revision integer NOT NULL,
             lastrevs integer[] NOT NULL DEFAULT '{}',
             revclosed boolean GENERATED ALWAYS AS (cardinality(lastrevs) > 0) STORED,
-            holes smallint[] COMPRESSION pglz, vbase bigint,
+            holes smallint[] COMPRESSION pglz, vbase bigint, vtop bigint,
             vrtxid1 integer[] COMPRESSION pglz, vrtxid2 integer[] COMPRESSION pglz, vrtxid3 integer[] COMPRESSION pglz,
             vrtxid1_wide bigint[] COMPRESSION pglz, vrtxid2_wide bigint[] COMPRESSION pglz,
             vrtxid3_wide bigint[] COMPRESSION pglz,

@@ -371,6 +371,15 @@ def test_an_editor_cannot_insert_a_chunk_its_readers_decode_differently(conn: Co
         # a triangle chunk with relative refs and no vbase
         "INSERT INTO tgsis.trgl_chunk (geoid, chunk, revision, vrtxid1, vrtxid2, vrtxid3) "
         "VALUES (%s, 9, %s, '{0}', '{1}', '{2}')",
+        # a vtop below the chunk's vertex ids (0, 1, 2): the one-ring readers would skip the chunk
+        "INSERT INTO tgsis.trgl_chunk (geoid, chunk, revision, vbase, vtop, vrtxid1, vrtxid2, vrtxid3) "
+        "VALUES (%s, 11, %s, 0, 1, '{0}', '{1}', '{2}')",
+        # a wide chunk (absolute ids) whose vtop is below its largest id
+        "INSERT INTO tgsis.trgl_chunk (geoid, chunk, revision, vtop, vrtxid1_wide, vrtxid2_wide, vrtxid3_wide) "
+        "VALUES (%s, 12, %s, 4294967296, '{0}', '{1}', '{4294967297}')",
+        # no vtop
+        "INSERT INTO tgsis.trgl_chunk (geoid, chunk, revision, vbase, vrtxid1, vrtxid2, vrtxid3) "
+        "VALUES (%s, 13, %s, 0, '{0}', '{1}', '{2}')",
     ]
     with login_roles(db_dsn, {"ed": "tgsis_editor"}) as made:
         ed = made.connect("ed")
@@ -380,8 +389,8 @@ def test_an_editor_cannot_insert_a_chunk_its_readers_decode_differently(conn: Co
             "INSERT INTO tgsis.vrtx_chunk (geoid, chunk, revision, x, y, z) VALUES (%s, 4, %s, '{1}', '{2}', '{3}')",
             "INSERT INTO tgsis.vrtx_chunk (geoid, chunk, revision, holes, x, y, z) "
             "VALUES (%s, 8, %s, '{2}', '{1,NULL,3}', '{1,NULL,3}', '{1,NULL,3}')",
-            "INSERT INTO tgsis.trgl_chunk (geoid, chunk, revision, vbase, vrtxid1, vrtxid2, vrtxid3) "
-            "VALUES (%s, 10, %s, 0, '{0}', '{1}', '{2}')",
+            "INSERT INTO tgsis.trgl_chunk (geoid, chunk, revision, vbase, vtop, vrtxid1, vrtxid2, vrtxid3) "
+            "VALUES (%s, 10, %s, 0, 4, '{0}', '{1}', '{2}')",
         ]
         assert [_outcome(ed, statement, (chunked, w[0])) for statement in good] == [None] * len(good)
         answers = [_outcome(ed, statement, (chunked, w[0])) for statement in bad]

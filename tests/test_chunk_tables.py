@@ -158,7 +158,7 @@ def _expected_columns(table: str) -> list[tuple[str, str]]:
     return (
         [("geoid", "bigint"), ("chunk", "bigint"), ("revision", "integer"), ("lastrevs", "integer[]")]
         + [("revclosed", "boolean"), ("holes", "smallint[]")]
-        + ([("vbase", "bigint")] if refs else [])
+        + ([("vbase", "bigint"), ("vtop", "bigint")] if refs else [])
         + [(v, kind) for v in values]
         + [(f"{r}_wide", "bigint[]") for r in refs]
     )
@@ -319,6 +319,7 @@ def test_writer_keeps_ids_beyond_int4_and_switches_to_wide_columns_and_back(conn
     raw = _chunk(conn, "trgl", 1, tri >> 10)
     assert raw is not None
     assert raw["vbase"] == big and raw["vrtxid1_wide"] is None
+    assert raw["vtop"] == big + 2 * 2  # vbase + twice the largest relative value: bounds big + 2
     assert raw["vrtxid1"] == [0, None, 2] and raw["vrtxid2"] == [1, None, -2] and raw["holes"] == [2]
     assert len(raw["vrtxid3"]) == 3
     assert _visible(conn, "trgl") == sorted(triangles)
@@ -329,6 +330,7 @@ def test_writer_keeps_ids_beyond_int4_and_switches_to_wide_columns_and_back(conn
     assert raw is not None
     assert raw["vbase"] is None and raw["vrtxid1"] is None and raw["vrtxid3"] is None
     assert raw["vrtxid1_wide"] == [big, 3, big + 2] and raw["holes"] is None
+    assert raw["vtop"] == big + 2  # absolute ids: the largest
     assert _visible(conn, "trgl") == sorted([*triangles, far])
     # gone again: back to relative
     assert _write(conn, "trgl", [], [(1, tri - 1)]) == 1
@@ -340,6 +342,7 @@ def test_writer_keeps_ids_beyond_int4_and_switches_to_wide_columns_and_back(conn
     edge = [(2, 0, 0, INT4_MAX, 1), (2, 1, INT4_MAX, 0, 2)]  # differences +2^31-1 and -(2^31-1)
     _write(conn, "trgl", edge)
     assert (_chunk(conn, "trgl", 2, 0) or {})["vbase"] == 0
+    assert (_chunk(conn, "trgl", 2, 0) or {})["vtop"] == 2 * INT4_MAX
     assert _visible(conn, "trgl", 2) == edge
     _write(conn, "trgl", [(2, 2, INT4_MAX + 1, 0, 1)])  # the first corner INT4_MAX + 1 above vbase
     assert (_chunk(conn, "trgl", 2, 0) or {})["vbase"] is None

@@ -58,7 +58,8 @@ BEGIN
                         quote_ident(p_table), v_bad.object, v_bad.chunk, v_bad.revision
             USING ERRCODE = 'TG000',
                   DETAIL = format('%s chunk version(s) of tgsis.%I with arrays not one-dimensional from 1, of unequal length, '
-                                  'ending on a hole, NULL elsewhere than at their holes, or refs both relative and absolute.',
+                                  'ending on a hole, NULL elsewhere than at their holes, refs both relative and absolute, or a vtop '
+                                  'that does not bound the vertex ids.',
                                   v_bad.n, p_table || '_chunk'),
                   HINT = 'nothing was converted; report it with the table, object, chunk and set';
     END IF;

@@ -12,7 +12,9 @@
 -- slots holes lists (ascending, not the last slot; holes NULL when none),
 -- the double precision arrays present, and for vertex-id columns either vbase
 -- with the relative integer arrays or the absolute _wide arrays, never both
--- nor neither. Returned as SQL boolean expressions over the alias c, built
+-- nor neither, and vtop a bound of every vertex id of the chunk (else the
+-- readers of the cells on given vertices would skip a chunk that holds some).
+-- Returned as SQL boolean expressions over the alias c, built
 -- from the registry (tgsis.chunk_columns); the caller ANDs them (NULL counts
 -- as false). Internal: runs with the caller's rights.
 CREATE FUNCTION tgsis.chunk_encoding_checks(p_table text)
@@ -45,6 +47,16 @@ BEGIN
                   ORDER BY c.colorder)
         || ARRAY(SELECT format('(c.vbase IS NOT NULL) = (c.%1$I IS NOT NULL) AND (c.vbase IS NULL) = (c.%2$I IS NOT NULL)',
                                c.name, c.name || '_wide')
+                   FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder)
+        -- vtop bounds every vertex id of the chunk (readers skip the chunks whose [vbase, vtop] misses the vertices
+        -- they look for): relative, vtop - vbase at least twice every stored value (v1 - vbase + vK - v1 is then
+        -- below it), unless vtop is the largest bigint; _wide, every id; tested in C (< ANY), no element unnested
+        || CASE WHEN EXISTS (SELECT FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref')
+                THEN ARRAY['c.vtop IS NOT NULL AND (c.vbase IS NULL OR c.vtop >= c.vbase)'] ELSE '{}'::text[] END
+        || ARRAY(SELECT format('(c.vbase IS NULL OR c.vtop = 9223372036854775807 '
+                               'OR NOT coalesce((c.vtop - c.vbase) / 2 < ANY (c.%1$I), false)) '
+                               'AND (c.vbase IS NOT NULL OR NOT coalesce(c.vtop < ANY (c.%2$I), false))',
+                               c.name, c.name || '_wide')
                    FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder);
 END
 $$;
@@ -52,4 +64,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.chunk_encoding_checks(text) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.chunk_encoding_checks(text) IS
-    'the conditions (SQL boolean expressions over the alias c) a chunk version of tgsis.<table>_chunk meets when encoded as its readers read it: arrays one-dimensional from 1, of one length between 1 and the chunk size, NULL exactly at holes, doubles present, refs either relative with vbase or absolute in _wide; shared by tgsis.check_chunk_conversion and tgsis.chunk_insert_check';
+    'the conditions (SQL boolean expressions over the alias c) a chunk version of tgsis.<table>_chunk meets when encoded as its readers read it: arrays one-dimensional from 1, of one length between 1 and the chunk size, NULL exactly at holes, doubles present, refs either relative with vbase or absolute in _wide, vtop a bound of every vertex id; shared by tgsis.check_chunk_conversion and tgsis.chunk_insert_check';

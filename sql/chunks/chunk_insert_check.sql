@@ -43,7 +43,8 @@ BEGIN
             USING ERRCODE = 'check_violation',
                   DETAIL = format('%s chunk version(s) inserted with arrays not one-dimensional from 1, of unequal length or '
                                   'longer than a chunk, ending on a hole, NULL elsewhere than at their holes, without a '
-                                  'coordinate array, or with refs both relative and absolute (docs/storage.md, '
+                                  'coordinate array, with refs both relative and absolute, or with a vtop that does not bound the '
+                                  'vertex ids (docs/storage.md, '
                                   '"Chunks and the mapping of ids").', v_bad.n),
                   HINT = format('write the rows through the view tgsis.%I, which encodes them', v_table);
     END IF;

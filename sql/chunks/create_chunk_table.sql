@@ -2,7 +2,9 @@
 -- The layout is the contract of docs/storage.md ("Chunks and the mapping of
 -- ids", "Compression, bit-exact", "Versioning of chunks"): the row table's key
 -- with its local-id column replaced by chunk (= id >> log2(chunksize)), then
--- revision, lastrevs, revclosed as in <table>_ver, holes, vbase for a table
+-- revision, lastrevs, revclosed as in <table>_ver, holes, vbase and vtop (a
+-- bound of its vertex ids: the readers of the cells on given vertices skip the
+-- chunks whose [vbase, vtop] misses them) for a table
 -- with vertex-id columns, one array per other column in the row table's order,
 -- and a <ref>_wide bigint[] per vertex-id column. The columns come from the
 -- registry and the live storage (tgsis.chunk_columns), never from a list typed
@@ -67,7 +69,7 @@ BEGIN
                               'holes smallint[] COMPRESSION pglz'];
     v_refs := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder);
     IF cardinality(v_refs) > 0 THEN
-        v_defs := v_defs || 'vbase bigint'::text;
+        v_defs := v_defs || ARRAY['vbase bigint', 'vtop bigint'];
     END IF;
     FOR v_c IN SELECT c.name, c.role FROM tgsis.chunk_columns(p_table) c WHERE c.keyorder IS NULL ORDER BY c.colorder LOOP
         v_defs := v_defs || CASE WHEN v_c.role = 'float' THEN format('%I double precision[] COMPRESSION %s', v_c.name, v_float)
@@ -116,6 +118,10 @@ BEGIN
     IF cardinality(v_refs) > 0 THEN
         EXECUTE format('COMMENT ON COLUMN %s.vbase IS %L', v_chunk,
                        'the smallest vertex id among all ref values of the chunk; NULL when the _wide columns hold them');
+        EXECUTE format('COMMENT ON COLUMN %s.vtop IS %L', v_chunk,
+                       'a bound of the vertex ids of the chunk: vbase + 2 * the largest relative value (0 at least), or the largest '
+                       '_wide id; the largest bigint when that overflows; readers of the cells on given vertices skip chunks whose '
+                       '[vbase, vtop] misses them');
     END IF;
 
     -- the rights of the row table's storage (its grants; its row-level security, policies and their comments)

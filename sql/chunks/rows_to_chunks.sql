@@ -105,12 +105,19 @@ BEGIN
         'rcols', array_to_string(ARRAY(SELECT format('r.%I', c) FROM unnest(v_vals) AS c)
                                  || CASE WHEN v_versioned THEN ARRAY['r.revision', 'r.lastrevs'] ELSE '{}'::text[] END, ', '),
         'rvals', array_to_string(ARRAY(SELECT format('r.%I', c) FROM unnest(v_vals) AS c), ', '),
-        'wfit', CASE WHEN cardinality(v_refs) = 0 THEN 'NULL::bigint AS vmin, true AS fits'
+        -- (and vtop, the chunk version's bound of its vertex ids, as tgsis.write_chunk_rows computes it)
+        'wfit', CASE WHEN cardinality(v_refs) = 0 THEN 'NULL::bigint AS vmin, true AS fits, NULL::bigint AS vtop'
                      ELSE format('min(least(%1$s)) OVER a AS vmin, '
-                                 'coalesce(max(m.%2$I) OVER a - min(least(%1$s)) OVER a <= 2147483647%3$s, true) AS fits',
+                                 'coalesce(max(m.%2$I) OVER a - min(least(%1$s)) OVER a <= 2147483647%3$s, true) AS fits, '
+                                 'CASE WHEN coalesce(max(m.%2$I) OVER a - min(least(%1$s)) OVER a <= 2147483647%3$s, true) '
+                                 'THEN least((min(least(%1$s)) OVER a)::numeric + 2 * greatest(0, max(m.%2$I) OVER a '
+                                 '- min(least(%1$s)) OVER a%4$s), 9223372036854775807)::bigint '
+                                 'ELSE max(greatest(%1$s)) OVER a END AS vtop',
                                  array_to_string(ARRAY(SELECT format('m.%I', r) FROM unnest(v_refs) AS r), ', '), v_refs[1],
                                  coalesce((SELECT string_agg(format(' AND min(m.%1$I - m.%2$I) OVER a >= -2147483648'
                                                                     ' AND max(m.%1$I - m.%2$I) OVER a <= 2147483647', r, v_refs[1]), '')
+                                             FROM unnest(v_refs[2:]) AS r), ''),
+                                 coalesce((SELECT string_agg(format(', max(m.%1$I - m.%2$I) OVER a', r, v_refs[1]), '')
                                              FROM unnest(v_refs[2:]) AS r), '')) END,
         'enc', array_to_string(
             ARRAY(SELECT format('array_agg(CASE WHEN s.slot = m.slot THEN m.%1$I END ORDER BY s.slot) AS %1$I', f)
@@ -123,11 +130,11 @@ BEGIN
                                    r, r || '_wide')
                      FROM unnest(v_refs) AS r), ', '),
         'inscols', array_to_string(v_k || ARRAY['revision', 'lastrevs', 'holes']
-                                   || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['vbase'] ELSE '{}'::text[] END
+                                   || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['vbase', 'vtop'] ELSE '{}'::text[] END
                                    || ARRAY(SELECT quote_ident(c) FROM unnest(v_vals) AS c)
                                    || ARRAY(SELECT quote_ident(r || '_wide') FROM unnest(v_refs) AS r), ', '),
         'insvals', array_to_string(ARRAY(SELECT 'n.' || k FROM unnest(v_k) AS k) || ARRAY['n.w', 'l.lastrevs', 'n.holes']
-                                   || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['n.vbase'] ELSE '{}'::text[] END
+                                   || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['n.vbase', 'n.vtop'] ELSE '{}'::text[] END
                                    || ARRAY(SELECT 'n.' || quote_ident(c) FROM unnest(v_vals) AS c)
                                    || ARRAY(SELECT 'n.' || quote_ident(r || '_wide') FROM unnest(v_refs) AS r), ', '));
     v_sql := $q$
@@ -156,10 +163,10 @@ WITH sets AS MATERIALIZED (
     SELECT m.*, lag(m.slot, 1, 0::bigint) OVER (PARTITION BY {m_K}, m.w ORDER BY m.slot) AS prev, {wfit}
       FROM m WINDOW a AS (PARTITION BY {m_K}, m.w)
 ), n AS (  -- each row expands to the holes before it and itself: slots 1 .. last, no join
-    SELECT {m_K}, m.w, CASE WHEN m.fits THEN m.vmin END AS vbase,
+    SELECT {m_K}, m.w, CASE WHEN m.fits THEN m.vmin END AS vbase, m.vtop,
            array_agg(s.slot::smallint ORDER BY s.slot) FILTER (WHERE s.slot < m.slot) AS holes, {enc}
       FROM g m CROSS JOIN LATERAL generate_series(m.prev + 1, m.slot) AS s(slot)
-     GROUP BY {m_K}, m.w, m.vmin, m.fits
+     GROUP BY {m_K}, m.w, m.vmin, m.fits, m.vtop
 )
 INSERT INTO {chunk} ({inscols})
 SELECT {insvals} FROM n JOIN l ON {match_n_l} AND l.w = n.w

@@ -220,12 +220,19 @@ BEGIN
         'o_vals', array_to_string(ARRAY(SELECT 'o.' || quote_ident(c) FROM unnest(v_vals) AS c), ', '),
         'n_vals', array_to_string(ARRAY(SELECT 'n.' || quote_ident(c) FROM unnest(v_vals) AS c), ', '),
         -- a chunk's refs are relative when every difference fits integer, else absolute in the _wide columns
-        'fit', CASE WHEN cardinality(v_refs) = 0 THEN 'NULL::bigint AS vmin, true AS fits'
+        -- (and the maxima of vtop, the chunk's bound of its vertex ids: vbase + 2 * the largest relative value, or
+        -- the largest _wide id; chunk_encoding_checks says why twice)
+        'fit', CASE WHEN cardinality(v_refs) = 0 THEN 'NULL::bigint AS vmin, true AS fits, NULL::bigint AS vtop'
                     ELSE format('min(least(%1$s)) AS vmin, '
-                                'coalesce(max(m.%2$I) - min(least(%1$s)) <= 2147483647%3$s, true) AS fits',
+                                'coalesce(max(m.%2$I) - min(least(%1$s)) <= 2147483647%3$s, true) AS fits, '
+                                'CASE WHEN coalesce(max(m.%2$I) - min(least(%1$s)) <= 2147483647%3$s, true) '
+                                'THEN least(min(least(%1$s))::numeric + 2 * greatest(0, max(m.%2$I) - min(least(%1$s))%4$s), '
+                                '9223372036854775807)::bigint ELSE max(greatest(%1$s)) END AS vtop',
                                 array_to_string(ARRAY(SELECT format('m.%I', r) FROM unnest(v_refs) AS r), ', '), v_refs[1],
                                 coalesce((SELECT string_agg(format(' AND min(m.%1$I - m.%2$I) >= -2147483648'
                                                                    ' AND max(m.%1$I - m.%2$I) <= 2147483647', r, v_refs[1]), '')
+                                            FROM unnest(v_refs[2:]) AS r), ''),
+                                coalesce((SELECT string_agg(format(', max(m.%1$I - m.%2$I)', r, v_refs[1]), '')
                                             FROM unnest(v_refs[2:]) AS r), '')) END,
         'enc', array_to_string(
             ARRAY(SELECT format('array_agg(m.%I ORDER BY s.slot) AS %I', f, f) FROM unnest(v_floats) AS f)
@@ -235,11 +242,11 @@ BEGIN
             || ARRAY(SELECT format('CASE WHEN NOT e.fits THEN array_agg(m.%I ORDER BY s.slot) END AS %I', r, r || '_wide')
                      FROM unnest(v_refs) AS r), ', '),
         'setcols', array_to_string(ARRAY['holes = n.holes']
-                                   || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['vbase = n.vbase'] ELSE '{}'::text[] END
+                                   || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['vbase = n.vbase', 'vtop = n.vtop'] ELSE '{}'::text[] END
                                    || ARRAY(SELECT format('%I = n.%I', c, c) FROM unnest(v_vals) AS c)
                                    || ARRAY(SELECT format('%I = n.%I', r || '_wide', r || '_wide') FROM unnest(v_refs) AS r), ', '),
         'inscols', array_to_string(v_k || ARRAY['revision', 'holes']
-                                   || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['vbase'] ELSE '{}'::text[] END
+                                   || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['vbase', 'vtop'] ELSE '{}'::text[] END
                                    || ARRAY(SELECT quote_ident(c) FROM unnest(v_vals) AS c)
                                    || ARRAY(SELECT quote_ident(r || '_wide') FROM unnest(v_refs) AS r), ', '),
         -- a chunk whose new content is the visible one bit for bit (array_send: -0.0 is not 0.0) is not written
@@ -249,7 +256,7 @@ BEGIN
                                            FROM unnest(v_vals || ARRAY(SELECT r || '_wide' FROM unnest(v_refs) AS r)) AS c),
                                 ' AND '),
         'insvals', array_to_string(ARRAY(SELECT 'n.' || k FROM unnest(v_k) AS k) || ARRAY['$2', 'n.holes']
-                                   || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['n.vbase'] ELSE '{}'::text[] END
+                                   || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['n.vbase', 'n.vtop'] ELSE '{}'::text[] END
                                    || ARRAY(SELECT 'n.' || quote_ident(c) FROM unnest(v_vals) AS c)
                                    || ARRAY(SELECT 'n.' || quote_ident(r || '_wide') FROM unnest(v_refs) AS r), ', '));
     v_sql := $q$
@@ -273,12 +280,12 @@ WITH k AS (
       FROM k LEFT JOIN m ON {match_m_k}
      GROUP BY {k_K}
 ), n AS (
-    SELECT {e_K}, CASE WHEN e.fits THEN e.vmin END AS vbase,
+    SELECT {e_K}, CASE WHEN e.fits THEN e.vmin END AS vbase, e.vtop,
            array_agg(s.slot::smallint ORDER BY s.slot) FILTER (WHERE m.slot IS NULL) AS holes, {enc}
       FROM e CROSS JOIN LATERAL generate_series(1, e.last::integer) AS s(slot)
       LEFT JOIN m ON {match_m_e} AND m.slot = s.slot
      WHERE e.last IS NOT NULL
-     GROUP BY {e_K}, e.vmin, e.fits
+     GROUP BY {e_K}, e.vmin, e.fits, e.vtop
 ), same AS (
     SELECT v.vtoid, v.vtid FROM v JOIN n ON {match_v_n} WHERE {same}
 ), upd AS (

@@ -53,6 +53,8 @@ DECLARE
     v_nulls   text;
     v_written bigint;
     v_stored  bigint;
+    v_versioned boolean;
+    v_held    text;
 BEGIN
     SELECT * INTO v_reg FROM tgsis.model_tables t WHERE t.tablename = p_table AND t.chunkcolumn IS NOT NULL;
     IF NOT FOUND OR NOT tgsis.stored_in_chunks(p_table) THEN
@@ -91,6 +93,15 @@ BEGIN
                   DETAIL = 'A written row replaces the row of its id: its id is not also deleted.',
                   HINT = 'give each key once, with all its values';
     END IF;
+    -- "a written id the object holds now" (read below only when needed, as the face would answer it: the visible
+    -- chunk versions, those of the session's set when versioned, every one when not; tgsis's owner passes the class
+    -- rights filter) but read by key: only the chunks holding p_ids are decoded (tgsis.storage_row_versions),
+    -- where the face decoded the whole object
+    v_held := format('SELECT (array_agg(f.%2$I))[1] FROM %1$s f WHERE f.%3$I = $1 AND f.%2$I = ANY ($2)'
+                     ' AND (NOT $3 OR ((f.revision = ANY ((SELECT tgsis.get_revisions(true))::integer[])) IS TRUE'
+                     ' AND (NOT f.revclosed OR NOT (f.lastrevs && (SELECT tgsis.get_revisions(true))))))',
+                     tgsis.storage_row_versions('tgsis', p_table, p_ids), v_reg.chunkcolumn, v_reg.keycolumn);
+    v_versioned := EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table);
     -- the rights of today's row path: the view's privileges, the class's right on the object
     IF (v_n > 0 AND NOT has_table_privilege(tgsis.calling_role(), v_face::regclass, 'INSERT'))
        OR (v_d > 0 AND NOT has_table_privilege(tgsis.calling_role(), v_face::regclass, 'DELETE')) THEN
@@ -102,9 +113,7 @@ BEGIN
     -- a written id that the object holds now is a change: on rows a close and an insert (tgsis.close_object_rows
     -- asks DELETE), so a role without DELETE may add rows, not rewrite stored ones (read only when it lacks DELETE)
     IF v_n > 0 AND NOT has_table_privilege(tgsis.calling_role(), v_face::regclass, 'DELETE') THEN
-        EXECUTE format('SELECT (array_agg(f.%2$I))[1] FROM %1$s f WHERE f.%3$I = $1 AND f.%2$I = ANY ($2)',
-                       v_face, v_reg.chunkcolumn, v_reg.keycolumn)
-           INTO v_stored USING p_geoid, p_ids;
+        EXECUTE v_held INTO v_stored USING p_geoid, p_ids, v_versioned;
         IF v_stored IS NOT NULL THEN
             RAISE EXCEPTION 'role % may not write %', quote_ident(tgsis.calling_role()), v_face
                 USING ERRCODE = 'insufficient_privilege',
@@ -119,9 +128,7 @@ BEGIN
         -- same refusal here (TG300), an edit that only adds is written at any level as on rows (read only then)
         IF current_setting('transaction_isolation') <> 'read committed' THEN
             IF v_d = 0 AND v_n > 0 THEN
-                EXECUTE format('SELECT (array_agg(f.%2$I))[1] FROM %1$s f WHERE f.%3$I = $1 AND f.%2$I = ANY ($2)',
-                               v_face, v_reg.chunkcolumn, v_reg.keycolumn)
-                   INTO v_stored USING p_geoid, p_ids;
+                EXECUTE v_held INTO v_stored USING p_geoid, p_ids, v_versioned;
             END IF;
             IF v_d > 0 OR v_stored IS NOT NULL THEN
                 PERFORM tgsis.require_read_committed('a set-based delete of versioned objects');

@@ -91,7 +91,8 @@ BEGIN
                         THEN format('(SELECT w.geoid, w.timem, w.trglid, w.nodeid1 AS vrtxid1, w.nodeid2 AS vrtxid2,
                                              w.nodeid3 AS vrtxid3, w.revision, w.revclosed, w.lastrevs FROM %s w)',
                                     tgsis.storage_table('tgsis', p_table))
-                        ELSE tgsis.storage_row_versions('tgsis', p_table) END,
+                        -- (stored in chunks: only the chunks whose vertex-id bounds hold a near vertex)
+                        ELSE tgsis.storage_cells_on(p_table, v_near) END,
                    -- the cells on a near vertex through the vertex BRIN, by spans (an = ANY searches it once per id)
                    tgsis.cells_on_vertices_sql(p_k, v_near, '$3'),
                    -- (an instant of a surface at instants, tgsis.merge_instant_by_region: that instant's cells)

@@ -465,7 +465,8 @@ BEGIN
                       FROM pg_temp.tgsis_mr_c m GROUP BY m.id) AS u) AS w;
 
     -- 5. the one-ring margin: the base's cells on a vertex either side moved, added or removed. Found through
-    -- the vertex BRIN of the cell storage by spans of those ids, each cell tested exactly against a hashed
+    -- the vertex BRIN of the cell storage by spans of those ids (stored in chunks: the chunks whose vertex-id
+    -- bounds hold one of them, tgsis.storage_cells_on), each cell tested exactly against a hashed
     -- set of them (tgsis.cells_on_vertices_sql), and meeting the changes of its corners by equality
     CREATE TEMPORARY TABLE tgsis_mr_margin (id bigint NOT NULL, v bigint[] NOT NULL, sides integer NOT NULL) ON COMMIT DROP;
     v_shape := ARRAY(SELECT x.id FROM pg_temp.tgsis_mr_vx x WHERE x.p_shape OR x.c_shape ORDER BY x.id);
@@ -482,7 +483,10 @@ BEGIN
                           CROSS JOIN LATERAL unnest(c.v) AS u (vid)
                           JOIN pg_temp.tgsis_mr_vx x ON x.id = u.vid AND (x.p_shape OR x.c_shape)
                          GROUP BY c.id, c.v',
-                       v_cellid, v_row, v_csrc, tgsis.cells_on_vertices_sql(v_k, v_shape, '$3'), v_cobj)
+                       v_cellid, v_row,
+                       -- (model 1 stored in chunks: only the chunks whose vertex-id bounds hold one of those vertices)
+                       CASE WHEN p_times IS NULL THEN tgsis.storage_cells_on(v_table, v_shape) ELSE v_csrc END,
+                       tgsis.cells_on_vertices_sql(v_k, v_shape, '$3'), v_cobj)
            USING p_geoid, v_base, v_shape;
     END IF;
 

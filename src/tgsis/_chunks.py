@@ -105,11 +105,14 @@ class ChunkColumns:
     def copy_columns(self) -> list[str]:
         """The columns a binary COPY of :func:`to_copy` fills, in its order (``lastrevs``, ``revclosed`` left out)."""
         wide = [f"{c}_wide" for c in self.ref_order]
-        return ["geoid", "chunk", "revision", "holes", *(["vbase"] if self.refs else []), *self.names, *wide]
+        return ["geoid", "chunk", "revision", "holes", *(["vbase", "vtop"] if self.refs else []), *self.names, *wide]
 
     def select_columns(self) -> list[str]:
-        """The columns :func:`from_copy` parses, in its order: ``chunk, holes, [vbase,] arrays..., [wide...]``."""
-        return self.copy_columns()[1:2] + self.copy_columns()[3:]
+        """The columns :func:`from_copy` parses, in its order: ``chunk, holes, [vbase,] arrays..., [wide...]``.
+
+        ``vtop`` (a bound the readers of the cells on given vertices filter by) is written, not read back.
+        """
+        return [c for c in self.copy_columns()[1:2] + self.copy_columns()[3:] if c != "vtop"]
 
 
 @dataclass(frozen=True)
@@ -138,6 +141,9 @@ class ChunkSet:
         The ref columns as stored (first ``v1 - vbase``, others ``vK - v1``; 0 on holes and in wide chunks).
     absolute : dict of str to (s,) int64
         The ref columns' ids (0 on holes); stored (the ``_wide`` arrays) only for wide chunks.
+    vtop : (c,) int64
+        A bound of each chunk's ref values, as the column ``vtop`` stores it (:func:`ref_bound`; -1 without ref
+        columns; empty when decoded, :func:`from_copy` does not read it).
     """
 
     columns: ChunkColumns
@@ -149,6 +155,7 @@ class ChunkSet:
     wide: BoolArray = field(default_factory=lambda: np.empty(0, dtype=bool))
     relative: dict[str, npt.NDArray[np.int32]] = field(default_factory=dict)
     absolute: dict[str, IntArray] = field(default_factory=dict)
+    vtop: IntArray = field(default_factory=lambda: np.empty(0, dtype=np.int64))
 
     @property
     def offsets(self) -> IntArray:
@@ -305,11 +312,68 @@ def encode(ids: npt.ArrayLike, columns: Mapping[str, npt.ArrayLike], spec: Chunk
         for r in ref_order:
             relative[r] = slotted(diffs[r] if row_wide is None else np.where(row_wide, 0, diffs[r]), np.int32)
             absolute[r] = slotted(refs[r], np.int64)
+        largest = refs[ref_order[0]]
+        reach = np.zeros(n, dtype=np.int64)  # the largest stored relative value of each row, 0 at least
+        for r in ref_order:
+            largest = np.maximum(largest, refs[r])
+            reach = np.maximum(reach, diffs[r])
+        if row_wide is not None:
+            reach[row_wide] = 0  # (not stored relative: their bound is their largest id)
+        vtop = ref_bound(vbase, np.maximum.reduceat(reach, starts), np.maximum.reduceat(largest, starts), wide)
     else:
         for r in ref_order:
             relative[r] = np.zeros(total, dtype=np.int32)
             absolute[r] = np.zeros(total, dtype=np.int64)
-    return ChunkSet(spec, chunk, lengths, present, values, vbase, wide, relative, absolute)
+        vtop = np.full(c, -1, dtype=np.int64)
+    return ChunkSet(spec, chunk, lengths, present, values, vbase, wide, relative, absolute, vtop)
+
+
+def ref_bound(vbase: IntArray, reach: IntArray, largest: IntArray, wide: BoolArray) -> IntArray:
+    """The column ``vtop`` of chunks: a bound of each chunk's vertex ids that C can check without unnesting.
+
+    A relative chunk's ids are ``vbase + (v1 - vbase) + (vK - v1)``, each
+    stored value at most the chunk's largest, ``reach`` (0 at least): so
+    ``vbase + 2 * reach`` bounds them, and ``tgsis.chunk_encoding_checks``
+    tests it with ``< ANY`` on the stored arrays (no per-slot sum). The
+    largest bigint when that overflows. A wide chunk: its largest id.
+
+    Parameters
+    ----------
+    vbase : (c,) int64
+        The chunks' vbase (ignored where ``wide``).
+    reach : (c,) int64
+        The largest stored relative value of each chunk, 0 at least (ignored where ``wide``).
+    largest : (c,) int64
+        The largest vertex id of each chunk.
+    wide : (c,) bool
+        The chunk's ids are stored absolute (``_wide``).
+
+    Returns
+    -------
+    (c,) int64
+    """
+    top = np.iinfo(np.int64).max
+    base = np.where(wide, 0, vbase).astype(np.int64)
+    twice = 2 * np.where(wide, 0, reach).astype(np.int64)  # reach < 2^31: no overflow
+    headroom = top - base
+    bound = np.where(twice > headroom, top, base + np.minimum(twice, headroom))
+    return np.where(wide, largest, bound).astype(np.int64)
+
+
+def _bound_of(chunks: ChunkSet) -> IntArray:
+    """:func:`ref_bound` of chunks that carry none (decoded ones): from their stored ref values."""
+    c = len(chunks.chunk)
+    starts = chunks.offsets[:-1]
+    if not c:
+        return np.empty(0, dtype=np.int64)
+    reach = np.zeros(len(chunks.present), dtype=np.int64)
+    largest = np.zeros(len(chunks.present), dtype=np.int64)
+    for r in chunks.columns.ref_order:
+        reach = np.maximum(reach, np.where(chunks.present, chunks.relative[r], 0))
+        largest = np.maximum(largest, np.where(chunks.present, chunks.absolute[r], 0))
+    return ref_bound(
+        chunks.vbase, np.maximum.reduceat(reach, starts), np.maximum.reduceat(largest, starts), chunks.wide
+    )
 
 
 # --------------------------------------------------------------------------- binary COPY
@@ -365,6 +429,7 @@ def to_copy(chunks: ChunkSet, geoid: int, revision: int = 0) -> bytes:
     heads = head.view(np.uint8).reshape(c, -1) if c else np.empty((0, 30), dtype=np.uint8)
 
     has_holes = np.logical_not(np.logical_and.reduceat(chunks.present, offsets[:-1])) if c else np.empty(0, bool)
+    vtop = chunks.vtop if len(chunks.vtop) == c or not spec.refs else _bound_of(chunks)
     null = np.array([-1], dtype=">i4").tobytes()
 
     # every array column's elements, flat over all slots, with the byte end of each slot
@@ -398,6 +463,7 @@ def to_copy(chunks: ChunkSet, geoid: int, revision: int = 0) -> bytes:
                 pieces.append(null)
             else:
                 pieces.append(np.array([(8, chunks.vbase[k])], dtype=[("l", ">i4"), ("v", ">i8")]).tobytes())
+            pieces.append(np.array([(8, vtop[k])], dtype=[("l", ">i4"), ("v", ">i8")]).tobytes())
         for kind, flat, ends, nulled in encoded:
             if nulled is not None and nulled[k]:
                 pieces.append(null)

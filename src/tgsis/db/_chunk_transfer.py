@@ -61,7 +61,7 @@ __all__ = [
 Conn = psycopg.Connection[Any]
 
 #: the columns of every chunk table that are neither key nor array of the row table
-_FIXED = ("revision", "lastrevs", "revclosed", "holes", "vbase")
+_FIXED = ("revision", "lastrevs", "revclosed", "holes", "vbase", "vtop")
 
 
 @dataclass(frozen=True)

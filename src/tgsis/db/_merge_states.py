@@ -693,6 +693,23 @@ def _read_change(
         assert row is not None
         return str(row[0])  # a parenthesized subquery, aliased by the reads
 
+    def around(vertex_ids: npt.NDArray[np.int64]) -> str:
+        """The relation to read the cells on ``vertex_ids`` from: of a table stored in chunks, only the chunks whose
+        vertex-id bounds hold one of them decoded (``tgsis.storage_cells_on``; no vertex-to-cell index there); else
+        the storage ``cell_s``, whose vertex BRIN :func:`on` searches."""
+        if cell_s != f"tgsis.{cell_t.view}_chunk_rows" or not len(vertex_ids):
+            return cell_s
+        allowed = conn.execute(  # (granted to tgsis's roles: another role reads the decoded view, as before)
+            "SELECT has_function_privilege('tgsis.storage_cells_on(text, bigint[])', 'EXECUTE')"
+        ).fetchone()
+        if not (allowed and allowed[0]):
+            return cell_s
+        row = conn.execute(
+            "SELECT tgsis.storage_cells_on(%s, %s::bigint[])", (cell_t.view, np.unique(vertex_ids).tolist())
+        ).fetchone()
+        assert row is not None
+        return str(row[0])
+
     def cells(where: sql.Composable, within: str = cell_s) -> list[npt.NDArray[Any]]:
         return columns_out_all(
             conn, [Packed(_rows_where(cell_t, within, sets, where), cell_t.key, cell_cols, [geoid])]
@@ -723,7 +740,7 @@ def _read_change(
         else None
     )
     v1 = np.unique(np.concatenate([v0_ids, _corner_ids(by_id, k) if by_id is not None else v0_ids[:0]]))
-    ring1 = cells(on(v1))
+    ring1 = cells(on(v1), around(v1))
     c1 = np.unique(np.concatenate([c0_ids, np.asarray(ring1[1], dtype=np.int64)[np.asarray(ring1[-1]) != 0]]))
     v2 = np.unique(np.concatenate([v1, _corner_ids(ring1, k)] + ([_corner_ids(by_id, k)] if by_id is not None else [])))
 

@@ -496,7 +496,25 @@ def _update_geometry_row_from_rows(conn: Conn, geoid: int, cell_table: str) -> i
     For a write of part of the object's rows: one pass over its vertex rows
     and one over its cell rows (their count), in the server. Read in binary:
     the coordinates exactly, whatever the session's ``extra_float_digits``.
+    Both tables stored in chunks: model 1's extent function
+    (``tgsis.static_extent``) instead of the faces, the same box and counts:
+    the cells are counted from the visible chunk versions' array lengths and
+    holes without decoding them, the box taken from the vertex chunks' unnested
+    coordinates (through the faces every vertex and cell of the object was
+    decoded with its id and tested for visibility row by row).
     """
+    if stored_in_chunks(conn, "vrtx") and stored_in_chunks(conn, cell_table):
+        with conn.cursor(binary=True) as cursor:
+            extent = cursor.execute(
+                sql.SQL("SELECT e.nvrtx, {corners}, e.ncell FROM tgsis.static_extent(%s) AS e").format(
+                    corners=box_corners(conn, sql.SQL("e.bbox"))
+                ),
+                (geoid,),
+            ).fetchone()
+        assert extent is not None
+        n = int(extent[0])
+        bounds = np.array([extent[1:4], extent[4:7]], dtype=np.float64) if n else None
+        return update_geometry_row(conn, geoid, bounds, n, int(extent[7]))
     with conn.cursor(binary=True) as cursor:
         row = cursor.execute(
             "SELECT count(*), min(x), min(y), min(z), max(x), max(y), max(z) FROM tgsis.vrtx WHERE geoid = %s",
