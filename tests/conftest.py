@@ -60,6 +60,14 @@ def pytest_addoption(parser: pytest.Parser) -> None:
         "server's version",
     )
     parser.addoption(
+        "--slowest-files",
+        type=int,
+        default=0,
+        metavar="N",
+        help="at the end, the N test files whose tests took longest (set-up, call and teardown summed): the "
+        "profile of a whole run, per file (tools/test-suites asks for it; docs/testing.md)",
+    )
+    parser.addoption(
         "--no-pure-tests",
         action="store_true",
         help=f"deselect the tests that reach no PostgreSQL server (neither pg nor {OWN_SERVER}); keep the others, "
@@ -74,6 +82,8 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 
 
 def pytest_configure(config: pytest.Config) -> None:
+    if config.getoption("--slowest-files") > 0:
+        config.pluginmanager.register(SlowestFiles(config.getoption("--slowest-files")), "tgsis-slowest-files")
     config.addinivalue_line(
         "markers",
         f"{OWN_SERVER}: the test starts or reaches a PostgreSQL server without the fixture pg "
@@ -154,6 +164,29 @@ def pytest_report_collectionfinish(config: pytest.Config, items: list[pytest.Ite
     if config.getoption("--pure-tests-only"):
         return "--pure-tests-only: the tests that reach a PostgreSQL server are deselected (they run in the suites)"
     return None
+
+
+class SlowestFiles:
+    """``--slowest-files N``: each file's test phases summed, the N longest said at the end (a profile per file)."""
+
+    def __init__(self, count: int) -> None:
+        self.count = count
+        self.seconds: dict[str, list[float]] = {}  # file -> [seconds of its tests' phases, tests]
+
+    def pytest_runtest_logreport(self, report: pytest.TestReport) -> None:
+        entry = self.seconds.setdefault(report.nodeid.split("::")[0], [0.0, 0])
+        entry[0] += report.duration
+        entry[1] += report.when == "call"
+
+    def pytest_terminal_summary(self, terminalreporter: Any) -> None:
+        if not self.seconds:
+            return
+        total = sum(spent for spent, _ in self.seconds.values())
+        terminalreporter.write_sep("=", f"slowest {self.count} files (set-up + call + teardown of their tests)")
+        for name, (spent, tests) in sorted(self.seconds.items(), key=lambda item: -item[1][0])[: self.count]:
+            terminalreporter.write_line(f"{spent:8.1f}s {100 * spent / total:5.1f}% {int(tests):5d} tests  {name}")
+        tests = int(sum(t for _, t in self.seconds.values()))
+        terminalreporter.write_line(f"{total:8.1f}s in all: {tests} tests in {len(self.seconds)} files")
 
 
 def _fault(conn: Conn) -> int:

@@ -327,7 +327,7 @@ def test_the_suites_run_on_both_servers_the_embedded_one_in_a_copy_alone(tmp_pat
     beside = {args.split()[-4]: set(listing.split()) for _, _, args, listing, _ in runs}
     order = [args.split()[-4] for _, _, args, _, _ in runs]  # the option choosing each pass's tests
     assert [args for _, _, args, _, _ in runs] == [
-        f"-m pytest -p no:cacheprovider --durations=15 {option} -k x y" for option in order
+        f"-m pytest -p no:cacheprovider --durations=15 --slowest-files=25 {option} -k x y" for option in order
     ], runs
     # both storages of model 1 stay tested: PostgreSQL 15 on chunks (the default), 18 on rows; the pure
     # tests run once, in a pass of their own (tests/test_server_tests_only.py checks the options)

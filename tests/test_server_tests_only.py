@@ -216,3 +216,18 @@ def test_a_selection_the_pass_options_empty_passes_and_two_options_stop_the_run(
     both = _pytest(folder, "--no-pure-tests", "--pure-tests-only")
     assert both.ret == pytest.ExitCode.USAGE_ERROR, both.stdout.str()
     assert "--no-pure-tests and --pure-tests-only select different tests: give one of them" in both.stderr.str()
+
+
+def test_slowest_files_sums_each_files_tests_and_says_the_longest(pytester: pytest.Pytester) -> None:
+    folder = _folder(pytester)
+    folder.makepyfile(
+        test_slow="import time\n\n\ndef test_a():\n    time.sleep(0.3)\n\n\ndef test_b():\n    time.sleep(0.3)\n"
+    )
+    run = _pytest(folder, "--slowest-files=2")
+    assert run.ret == 0, run.stdout.str()
+    out = run.stdout.str()
+    lines = out[out.index("slowest 2 files") :].splitlines()[1:4]
+    assert lines[0].endswith("    2 tests  test_slow.py") and float(lines[0].split("s")[0]) >= 0.6, lines
+    assert "test_cases.py" in lines[1] or "test_marked.py" in lines[1], lines
+    assert lines[2].endswith(f"in all: {2 + len(SERVER_TESTS | ONE_SERVER_TESTS | PURE_TESTS)} tests in 3 files"), lines
+    assert "slowest" not in _pytest(folder).stdout.str()  # only when asked
