@@ -139,17 +139,17 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     if others:
         config.hook.pytest_deselected(items=others)
         items[:] = [item for item in items if kept(item)]
-        config.stash[_ONLY_PURE] = not items
+        config.stash[_EMPTIED_BY_OPTION] = not items
 
 
-_ONLY_PURE = pytest.StashKey[bool]()
+_EMPTIED_BY_OPTION = pytest.StashKey[bool]()
 
 
 def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
     """A selection the options emptied (``make test PYTEST_ARGS=tests/test_cli_help.py``: pure tests alone,
     in a server suite) passes here: it ran in another pass. A selection that collects nothing at all still
     fails (exit 5)."""
-    if session.config.stash.get(_ONLY_PURE, False) and exitstatus == pytest.ExitCode.NO_TESTS_COLLECTED:
+    if session.config.stash.get(_EMPTIED_BY_OPTION, False) and exitstatus == pytest.ExitCode.NO_TESTS_COLLECTED:
         session.exitstatus = pytest.ExitCode.OK
 
 
