@@ -285,7 +285,8 @@ def _fake_venv(folder: Path, record: Path, fail_when: str = "") -> None:
     (folder / "bin").mkdir(parents=True)
     _script(
         folder / "bin" / "python",
-        f'echo "$TGSIS_PG|$PWD|$*|$(ls -A .. | tr "\\n" " ")|$TGSIS_TEST_STORAGE" >> {shlex.quote(str(record))}\n'
+        f'echo "$TGSIS_PG|$PWD|$*|$(ls -A .. | tr "\\n" " ")|$TGSIS_TEST_STORAGE$TGSIS_TEST_STORAGE_BY_FILE" '
+        f">> {shlex.quote(str(record))}\n"
         f'[ "$TGSIS_PG" = {shlex.quote(fail_when) or "__never__"} ] && exit 3\nexit 0\n',
     )
 
@@ -329,12 +330,13 @@ def test_the_suites_run_on_both_servers_the_embedded_one_in_a_copy_alone(tmp_pat
     assert [args for _, _, args, _, _ in runs] == [
         f"-m pytest -p no:cacheprovider --durations=15 --slowest-files=25 {option} -k x y" for option in order
     ], runs
-    # both storages of model 1 stay tested: PostgreSQL 15 on chunks (the default), 18 on rows; the pure
-    # tests run once, in a pass of their own (tests/test_server_tests_only.py checks the options)
+    # both storages of model 1 stay tested: PostgreSQL 15 on chunks (the default), 18 on rows, every other
+    # file the other way round (1: TGSIS_TEST_STORAGE_BY_FILE, tests/test_harness.py); the pure tests run
+    # once, in a pass of their own (tests/test_server_tests_only.py checks the options)
     assert by_pass == {
-        "--no-pure-tests": ("system", str(ROOT), "chunks"),
+        "--no-pure-tests": ("system", str(ROOT), "chunks1"),
         "--pure-tests-only": ("system", str(ROOT), "chunks"),
-        "--server-tests-only": ("embedded", by_pass["--server-tests-only"][1], "rows"),
+        "--server-tests-only": ("embedded", by_pass["--server-tests-only"][1], "rows1"),
     }
     copy = Path(by_pass["--server-tests-only"][1])
     assert copy.name == "tgsis" and copy != ROOT
