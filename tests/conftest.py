@@ -22,6 +22,12 @@ but what they check is the harness's handling of processes (signals, the
 lease watcher, where a throwaway cluster's folder goes), the same code on
 every version; the version-specific part (initdb/pg_ctl flags, installing
 the extension) is checked by other tests that run in both suites.
+
+``--no-pure-tests`` deselects the pure tests alone (the first suite's
+server tests, ``one_server`` ones included), ``--pure-tests-only`` keeps
+them alone: ``tools/test-suites`` runs the pure tests in a pass of their
+own, on the second suite's side, so that the two sides take about as long
+(docs/testing.md, "Balance").
 """
 
 from __future__ import annotations
@@ -53,9 +59,31 @@ def pytest_addoption(parser: pytest.Parser) -> None:
         f"nor the mark {OWN_SERVER}) and those marked {ONE_SERVER}: what they prove does not depend on the "
         "server's version",
     )
+    parser.addoption(
+        "--slowest-files",
+        type=int,
+        default=0,
+        metavar="N",
+        help="at the end, the N test files whose tests took longest (set-up, call and teardown summed): the "
+        "profile of a whole run, per file (tools/test-suites asks for it; docs/testing.md)",
+    )
+    parser.addoption(
+        "--no-pure-tests",
+        action="store_true",
+        help=f"deselect the tests that reach no PostgreSQL server (neither pg nor {OWN_SERVER}); keep the others, "
+        f"{ONE_SERVER} included: they run in a pass of their own (--pure-tests-only)",
+    )
+    parser.addoption(
+        "--pure-tests-only",
+        action="store_true",
+        help=f"deselect the tests that reach a PostgreSQL server (pg at any depth, or the mark {OWN_SERVER}): "
+        "the pure tests' pass of their own",
+    )
 
 
 def pytest_configure(config: pytest.Config) -> None:
+    if config.getoption("--slowest-files") > 0:
+        config.pluginmanager.register(SlowestFiles(config.getoption("--slowest-files")), "tgsis-slowest-files")
     config.addinivalue_line(
         "markers",
         f"{OWN_SERVER}: the test starts or reaches a PostgreSQL server without the fixture pg "
@@ -85,24 +113,43 @@ def reaches_server(item: pytest.Item) -> bool:
     return SERVER_FIXTURE in fixturenames or item.get_closest_marker(OWN_SERVER) is not None
 
 
+_SELECTIONS = ("--server-tests-only", "--no-pure-tests", "--pure-tests-only")
+
+
+def _kept(config: pytest.Config) -> Callable[[pytest.Item], bool] | None:
+    """Which tests the options keep (``None``: all of them); two of them at once stop the run."""
+    given = [option for option in _SELECTIONS if config.getoption(option)]
+    if len(given) > 1:
+        raise pytest.UsageError(f"{' and '.join(given)} select different tests: give one of them")
+    if config.getoption("--server-tests-only"):
+        return runs_on_every_server
+    if config.getoption("--no-pure-tests"):
+        return reaches_server
+    if config.getoption("--pure-tests-only"):
+        return lambda item: not reaches_server(item)
+    return None
+
+
 @pytest.hookimpl(trylast=True)  # after -k and -m: a selection of pure tests alone is told from one of nothing
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    if not config.getoption("--server-tests-only"):
+    kept = _kept(config)
+    if kept is None:
         return
-    pure = [item for item in items if not runs_on_every_server(item)]
-    if pure:
-        config.hook.pytest_deselected(items=pure)
-        items[:] = [item for item in items if runs_on_every_server(item)]
-        config.stash[_ONLY_PURE] = not items
+    others = [item for item in items if not kept(item)]
+    if others:
+        config.hook.pytest_deselected(items=others)
+        items[:] = [item for item in items if kept(item)]
+        config.stash[_EMPTIED_BY_OPTION] = not items
 
 
-_ONLY_PURE = pytest.StashKey[bool]()
+_EMPTIED_BY_OPTION = pytest.StashKey[bool]()
 
 
 def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
-    """A selection of pure tests alone (``make test PYTEST_ARGS=tests/test_cli_help.py``) passes here: it
-    ran on the other suite. A selection that collects nothing at all still fails (exit 5)."""
-    if session.config.stash.get(_ONLY_PURE, False) and exitstatus == pytest.ExitCode.NO_TESTS_COLLECTED:
+    """A selection the options emptied (``make test PYTEST_ARGS=tests/test_cli_help.py``: pure tests alone,
+    in a server suite) passes here: it ran in another pass. A selection that collects nothing at all still
+    fails (exit 5)."""
+    if session.config.stash.get(_EMPTIED_BY_OPTION, False) and exitstatus == pytest.ExitCode.NO_TESTS_COLLECTED:
         session.exitstatus = pytest.ExitCode.OK
 
 
@@ -112,7 +159,34 @@ def pytest_report_collectionfinish(config: pytest.Config, items: list[pytest.Ite
             "--server-tests-only: the tests that reach no PostgreSQL server, and those marked "
             f"{ONE_SERVER}, are deselected (they run on the other suite)"
         )
+    if config.getoption("--no-pure-tests"):
+        return "--no-pure-tests: the tests that reach no PostgreSQL server are deselected (they run in a pass of their own)"
+    if config.getoption("--pure-tests-only"):
+        return "--pure-tests-only: the tests that reach a PostgreSQL server are deselected (they run in the suites)"
     return None
+
+
+class SlowestFiles:
+    """``--slowest-files N``: each file's test phases summed, the N longest said at the end (a profile per file)."""
+
+    def __init__(self, count: int) -> None:
+        self.count = count
+        self.seconds: dict[str, list[float]] = {}  # file -> [seconds of its tests' phases, tests]
+
+    def pytest_runtest_logreport(self, report: pytest.TestReport) -> None:
+        entry = self.seconds.setdefault(report.nodeid.split("::")[0], [0.0, 0])
+        entry[0] += report.duration
+        entry[1] += report.when == "call"
+
+    def pytest_terminal_summary(self, terminalreporter: Any) -> None:
+        if not self.seconds:
+            return
+        total = sum(spent for spent, _ in self.seconds.values())
+        terminalreporter.write_sep("=", f"slowest {self.count} files (set-up + call + teardown of their tests)")
+        for name, (spent, tests) in sorted(self.seconds.items(), key=lambda item: -item[1][0])[: self.count]:
+            terminalreporter.write_line(f"{spent:8.1f}s {100 * spent / total:5.1f}% {int(tests):5d} tests  {name}")
+        tests = int(sum(t for _, t in self.seconds.values()))
+        terminalreporter.write_line(f"{total:8.1f}s in all: {tests} tests in {len(self.seconds)} files")
 
 
 def _fault(conn: Conn) -> int:

@@ -11,7 +11,7 @@ import psycopg
 import pytest
 
 from tests.local_helpers import child_env
-from tgsis.testing import STORAGES, TestServer, default_storage, start_test_server
+from tgsis.testing import STORAGES, TestServer, default_storage, start_test_server, swapped_file
 
 BAD_DSN = "host=/nonexistent-socket-dir port=1 dbname=x connect_timeout=2"
 
@@ -132,10 +132,46 @@ def test_a_test_marked_chunks_takes_its_set_up_built_once_on_chunks(
 
 
 def test_an_unmarked_test_has_the_default_storage(
-    conn: psycopg.Connection[Any], tx: psycopg.Connection[Any], template_db: str, storage_template_db: str
+    request: pytest.FixtureRequest,
+    conn: psycopg.Connection[Any],
+    tx: psycopg.Connection[Any],
+    template_db: str,
+    storage_template_db: str,
 ) -> None:
-    assert _model1_storage(conn) == _model1_storage(tx) == {default_storage()}
+    assert _model1_storage(conn) == _model1_storage(tx) == {default_storage(request.node)}
     assert template_db == storage_template_db
+
+
+@pytest.mark.parametrize("suite", STORAGES)
+def test_storage_by_file_gives_every_other_file_the_other_storage(tmp_path: Path, suite: str) -> None:
+    # TGSIS_TEST_STORAGE_BY_FILE=1: two suites of opposite storages run each file once on each storage
+    assert (swapped_file("test_one.py"), swapped_file("test_two.py")) == (True, False)
+    (tmp_path / "conftest.py").write_text('pytest_plugins = ["tgsis.testing"]\n')
+    test = (
+        "import pytest\n"
+        "def test_db(db_storage):\n    print('STORAGE', __name__, db_storage)\n"
+        "@pytest.mark.storage('rows')\ndef test_marked(db_storage):\n    print('STORAGE', __name__, 'marked', db_storage)\n"
+    )
+    (tmp_path / "test_one.py").write_text(test)
+    (tmp_path / "test_two.py").write_text(test)
+    other = "rows" if suite == "chunks" else "chunks"
+    seen = {}
+    for by_file in ("0", "1"):
+        result = subprocess.run(
+            [sys.executable, "-m", "pytest", "-q", "-s", "-p", "no:cacheprovider", str(tmp_path)],
+            env=child_env(TGSIS_TEST_DSN=BAD_DSN, TGSIS_TEST_STORAGE=suite, TGSIS_TEST_STORAGE_BY_FILE=by_file),
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+        assert result.returncode == 0, result.stdout + result.stderr
+        out = result.stdout.splitlines()  # (a line may start with the progress dots of -q)
+        seen[by_file] = sorted(line[line.index("STORAGE") :] for line in out if "STORAGE " in line)
+    assert seen["0"] == sorted([f"STORAGE test_one {suite}", f"STORAGE test_two {suite}"] + MARKED)
+    assert seen["1"] == sorted([f"STORAGE test_one {other}", f"STORAGE test_two {suite}"] + MARKED)
+
+
+MARKED = ["STORAGE test_one marked rows", "STORAGE test_two marked rows"]  # the mark wins in every case
 
 
 @pytest.mark.storage("rows")
@@ -157,6 +193,11 @@ class TestAMarkedClass:
             "def test_db(db_storage):\n    pass\n",
             {"TGSIS_TEST_STORAGE": "chunk"},
             "TGSIS_TEST_STORAGE='chunk' names no storage",
+        ),
+        (
+            "def test_db(db_storage):\n    pass\n",
+            {"TGSIS_TEST_STORAGE_BY_FILE": "yes"},
+            "TGSIS_TEST_STORAGE_BY_FILE='yes': use 1 (storage by file) or 0",
         ),
     ],
 )

@@ -285,7 +285,8 @@ def _fake_venv(folder: Path, record: Path, fail_when: str = "") -> None:
     (folder / "bin").mkdir(parents=True)
     _script(
         folder / "bin" / "python",
-        f'echo "$TGSIS_PG|$PWD|$*|$(ls -A .. | tr "\\n" " ")|$TGSIS_TEST_STORAGE" >> {shlex.quote(str(record))}\n'
+        f'echo "$TGSIS_PG|$PWD|$*|$(ls -A .. | tr "\\n" " ")|$TGSIS_TEST_STORAGE$TGSIS_TEST_STORAGE_BY_FILE" '
+        f">> {shlex.quote(str(record))}\n"
         f'[ "$TGSIS_PG" = {shlex.quote(fail_when) or "__never__"} ] && exit 3\nexit 0\n',
     )
 
@@ -323,18 +324,26 @@ def _run_suites(
 def test_the_suites_run_on_both_servers_the_embedded_one_in_a_copy_alone(tmp_path: Path) -> None:
     status, out, runs = _run_suites(tmp_path)
     assert status == 0, out
-    by_server = {server: (folder, args) for server, folder, args, _, _ in runs}
-    beside = {server: set(listing.split()) for server, _, _, listing, _ in runs}
-    # both storages of model 1 stay tested: PostgreSQL 15 on chunks (the default), 18 on rows
-    assert {server: storage for server, _, _, _, storage in runs} == {"system": "chunks", "embedded": "rows"}
-    assert set(by_server) == {"system", "embedded"}
-    assert by_server["system"] == (str(ROOT), "-m pytest -p no:cacheprovider --durations=15 -k x y")
-    copy = Path(by_server["embedded"][0])
+    by_pass = {args.split()[-4]: (server, folder, storage) for server, folder, args, _, storage in runs}
+    beside = {args.split()[-4]: set(listing.split()) for _, _, args, listing, _ in runs}
+    order = [args.split()[-4] for _, _, args, _, _ in runs]  # the option choosing each pass's tests
+    assert [args for _, _, args, _, _ in runs] == [
+        f"-m pytest -p no:cacheprovider --durations=15 --slowest-files=25 {option} -k x y" for option in order
+    ], runs
+    # both storages of model 1 stay tested: PostgreSQL 15 on chunks (the default), 18 on rows, every other
+    # file the other way round (1: TGSIS_TEST_STORAGE_BY_FILE, tests/test_harness.py); the pure tests run
+    # once, in a pass of their own (tests/test_server_tests_only.py checks the options)
+    assert by_pass == {
+        "--no-pure-tests": ("system", str(ROOT), "chunks1"),
+        "--pure-tests-only": ("system", str(ROOT), "chunks"),
+        "--server-tests-only": ("embedded", by_pass["--server-tests-only"][1], "rows1"),
+    }
+    copy = Path(by_pass["--server-tests-only"][1])
     assert copy.name == "tgsis" and copy != ROOT
-    # the pure tests run once, in the system's suite (tests/test_server_tests_only.py checks the option)
-    assert by_server["embedded"][1] == "-m pytest -p no:cacheprovider --durations=15 --server-tests-only -k x y"
+    # the pure pass ends before the embedded suite starts (they share one side of the two cores)
+    assert order[-1] == "--server-tests-only", order
     # nothing beside the copy but the logs of this run (no ../shared, no other checkout)
-    assert beside["embedded"] <= {"tgsis", "venv.log", "system.log", "embedded.log"}, beside["embedded"]
+    assert beside["--server-tests-only"] <= {"tgsis", "venv.log", "system.log", "pure.log", "embedded.log"}, beside
     assert not copy.exists(), "the copy is removed afterwards"
     assert "done: the suite passed on both PostgreSQL versions" in out
 
@@ -352,8 +361,8 @@ def test_the_copys_venv_is_made_while_the_system_suite_runs(tmp_path: Path) -> N
     record = shlex.quote(str(tmp_path / "runs.txt"))
     status, out, runs = _run_suites(
         tmp_path,
-        make_first=f"for i in $(seq 100); do grep -q '^system|' {record} && break; sleep 0.1; done\n"
-        f"grep -q '^system|' {record} || exit 7\n",
+        make_first=f"for i in $(seq 100); do grep -q '^system|.*--no-pure-tests' {record} && break; sleep 0.1; done\n"
+        f"grep -q '^system|.*--no-pure-tests' {record} || exit 7\n",
     )
     assert status == 0, out
     assert {r[0] for r in runs} == {"system", "embedded"}

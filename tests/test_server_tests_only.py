@@ -1,4 +1,6 @@
-"""``--server-tests-only`` (tests/conftest.py) deselects exactly the tests that reach no server.
+"""``--server-tests-only`` (tests/conftest.py) deselects exactly the tests that reach no server;
+``--no-pure-tests`` and ``--pure-tests-only`` split the first suite into its server tests and a pass
+of the pure tests alone.
 
 ``make test`` runs the whole suite on PostgreSQL 15 and again on 18; the
 pure tests (no fixture depending, at any depth, on the server fixture ``pg``,
@@ -190,3 +192,42 @@ def test_a_selection_of_pure_tests_alone_passes_and_a_selection_of_nothing_still
     assert nothing.ret == 5, nothing.stdout.str()
     folder.makepyfile(test_failing="def test_pure_but_failing():\n    assert False\n")
     assert _pytest(folder, "--server-tests-only", "-k", "failing").ret == 0  # deselected: it runs on the other suite
+
+
+def test_the_first_suite_and_the_pure_pass_split_the_tests_between_them(pytester: pytest.Pytester) -> None:
+    # tools/test-suites: the first suite (--no-pure-tests) keeps the one_server tests, the pure pass the rest
+    folder = _folder(pytester)
+    server = _pytest(folder, "--collect-only", "--no-pure-tests")
+    assert server.ret == 0, server.stdout.str()
+    assert _collected(server.outlines) == SERVER_TESTS | ONE_SERVER_TESTS
+    assert "the tests that reach no PostgreSQL server are deselected" in server.stdout.str()
+    pure = _pytest(folder, "--pure-tests-only", "-rA")
+    assert pure.ret == 0, pure.stdout.str()
+    assert f"{len(PURE_TESTS)} passed, {len(SERVER_TESTS | ONE_SERVER_TESTS)} deselected" in pure.outlines[-1]
+    assert {line.removeprefix("PASSED ") for line in pure.outlines if line.startswith("PASSED ")} == PURE_TESTS
+    assert "skipped" not in pure.stdout.str()
+
+
+def test_a_selection_the_pass_options_empty_passes_and_two_options_stop_the_run(pytester: pytest.Pytester) -> None:
+    folder = _folder(pytester)
+    assert _pytest(folder, "--no-pure-tests", "-k", "pure").ret == 0  # they run in the pure pass
+    assert _pytest(folder, "--pure-tests-only", "-k", "server").ret == 0  # they run in the suites
+    assert _pytest(folder, "--pure-tests-only", "-k", "no_such_test").ret == 5
+    both = _pytest(folder, "--no-pure-tests", "--pure-tests-only")
+    assert both.ret == pytest.ExitCode.USAGE_ERROR, both.stdout.str()
+    assert "--no-pure-tests and --pure-tests-only select different tests: give one of them" in both.stderr.str()
+
+
+def test_slowest_files_sums_each_files_tests_and_says_the_longest(pytester: pytest.Pytester) -> None:
+    folder = _folder(pytester)
+    folder.makepyfile(
+        test_slow="import time\n\n\ndef test_a():\n    time.sleep(0.3)\n\n\ndef test_b():\n    time.sleep(0.3)\n"
+    )
+    run = _pytest(folder, "--slowest-files=2")
+    assert run.ret == 0, run.stdout.str()
+    out = run.stdout.str()
+    lines = out[out.index("slowest 2 files") :].splitlines()[1:4]
+    assert lines[0].endswith("    2 tests  test_slow.py") and float(lines[0].split("s")[0]) >= 0.6, lines
+    assert "test_cases.py" in lines[1] or "test_marked.py" in lines[1], lines
+    assert lines[2].endswith(f"in all: {2 + len(SERVER_TESTS | ONE_SERVER_TESTS | PURE_TESTS)} tests in 3 files"), lines
+    assert "slowest" not in _pytest(folder).stdout.str()  # only when asked

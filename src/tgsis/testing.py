@@ -31,6 +31,7 @@ import logging
 import os
 import time
 import uuid
+import zlib
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from typing import Any, Literal
@@ -297,18 +298,36 @@ STORAGE_MARK = "storage"
 """``@pytest.mark.storage("rows")``: the test's databases (``db_dsn``, ``conn``, ``tx``) have that storage."""
 
 
-def default_storage() -> Literal["rows", "chunks"]:
+def default_storage(node: pytest.Item | pytest.Collector | None = None) -> Literal["rows", "chunks"]:
     """The storage of the tests without the mark ``storage``: ``$TGSIS_TEST_STORAGE``, else ``chunks``.
+
+    With ``$TGSIS_TEST_STORAGE_BY_FILE=1``, the tests of every other file
+    (``node``'s file: its name's CRC-32 odd, :func:`swapped_file`) take the
+    other storage: two suites with opposite storages then run each file
+    once on each storage, and each storage on both servers
+    (docs/testing.md). Without ``node``: ``$TGSIS_TEST_STORAGE``'s.
 
     Raises
     ------
     pytest.UsageError
-        ``$TGSIS_TEST_STORAGE`` names no storage of :data:`STORAGES`.
+        ``$TGSIS_TEST_STORAGE`` names no storage of :data:`STORAGES`, or
+        ``$TGSIS_TEST_STORAGE_BY_FILE`` is neither empty, ``0`` nor ``1``.
     """
     value = os.environ.get("TGSIS_TEST_STORAGE") or "chunks"
     if value not in STORAGES:
         raise pytest.UsageError(f"TGSIS_TEST_STORAGE={value!r} names no storage: use one of {', '.join(STORAGES)}")
-    return "rows" if value == "rows" else "chunks"
+    storage: Literal["rows", "chunks"] = "rows" if value == "rows" else "chunks"
+    by_file = os.environ.get("TGSIS_TEST_STORAGE_BY_FILE") or "0"
+    if by_file not in ("0", "1"):
+        raise pytest.UsageError(f"TGSIS_TEST_STORAGE_BY_FILE={by_file!r}: use 1 (storage by file) or 0")
+    if by_file == "1" and node is not None and swapped_file(node.path.name):
+        return "chunks" if storage == "rows" else "rows"
+    return storage
+
+
+def swapped_file(name: str) -> bool:
+    """Whether the test file ``name`` (its base name) takes the other storage under ``$TGSIS_TEST_STORAGE_BY_FILE``."""
+    return zlib.crc32(name.encode()) % 2 == 1
 
 
 def storage_of(node: pytest.Item | pytest.Collector | None) -> str:
@@ -321,7 +340,7 @@ def storage_of(node: pytest.Item | pytest.Collector | None) -> str:
     """
     mark = node.get_closest_marker(STORAGE_MARK) if node is not None else None
     if mark is None:
-        return default_storage()
+        return default_storage(node)
     if len(mark.args) != 1 or mark.kwargs or mark.args[0] not in STORAGES:
         raise pytest.UsageError(
             f"{node.nodeid if node is not None else ''}: @pytest.mark.storage takes one storage of "
@@ -369,14 +388,15 @@ def storage_templates(pg: TestServer) -> Iterator[Callable[[str], str]]:
         yield get
 
 
-@pytest.fixture(scope="session")
-def template_db(storage_templates: Callable[[str], str]) -> str:
+@pytest.fixture(scope="module")
+def template_db(request: pytest.FixtureRequest, storage_templates: Callable[[str], str]) -> str:
     """Name of a database with tgsis installed, model 1 in :func:`default_storage` (cloned by :func:`db_dsn`).
 
     A test marked ``storage`` takes :func:`storage_template_db` instead (``db_dsn``
-    does): this one is the default storage's whatever the mark says.
+    does): this one is the default storage's (its module's, under
+    ``$TGSIS_TEST_STORAGE_BY_FILE``) whatever the mark says.
     """
-    return storage_templates(default_storage())
+    return storage_templates(default_storage(request.node))
 
 
 @pytest.fixture
@@ -459,6 +479,8 @@ def pytest_terminal_summary(terminalreporter: Any) -> None:
     terminalreporter.write_line(
         f"template installed with: {_SESSION.get('template_method', 'not used')}"
         f" (model 1 in: {', '.join(_SESSION.get('storages', [])) or 'no template made'}; default storage: "
-        f"{default_storage()}); CREATE EXTENSION tgsis: "
+        f"{default_storage()}"
+        + (", the other one for every other file" if os.environ.get("TGSIS_TEST_STORAGE_BY_FILE") == "1" else "")
+        + "); CREATE EXTENSION tgsis: "
         + ("available" if server.extension_files is None else f"NOT available ({server.extension_files})")
     )
