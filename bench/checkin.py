@@ -196,14 +196,15 @@ def same_grid_surface(a: tgsis.Mesh, b: tgsis.Mesh, side: int) -> bool:
     return bool(np.array_equal(cells[0], cells[1]))
 
 
-def relation_bytes(conn: Conn, tables: list[str]) -> int:
+def relation_bytes(conn: Conn, tables: list[str]) -> list[int]:
+    """``pg_total_relation_size`` of each table (heap, TOAST, indexes)."""
     row = conn.execute(
         sql.SQL("SELECT {}").format(
-            sql.SQL(" + ").join(sql.SQL("pg_total_relation_size({}::regclass)").format(sql.Literal(t)) for t in tables)
+            sql.SQL(", ").join(sql.SQL("pg_total_relation_size({}::regclass)").format(sql.Literal(t)) for t in tables)
         )
     ).fetchone()
     assert row is not None
-    return int(row[0])
+    return [int(v) for v in row]
 
 
 def wal_lsn(conn: Conn) -> str:
@@ -242,13 +243,16 @@ def bytes_of_local_edits(
         conn.commit()
         upload = time.perf_counter() - start
         vacuum_analyze(conn)
-        whole = relation_bytes(conn, tables)
+        parts = relation_bytes(conn, tables)
+        whole, geometry = sum(parts), parts[0] + parts[1]  # geometry: vertices and triangles, without the property
         conn.commit()
         print(
-            f"{label}: storage {', '.join(tables)}; upload {upload:.2f} s; object {whole / 1e6:.2f} MB "
-            f"({whole / base.n_vertices:.1f} B/vertex)"
+            f"{label}: upload {upload:.2f} s; object {whole / 1e6:.2f} MB ({whole / base.n_vertices:.1f} B/vertex: "
+            + ", ".join(f"{t} {b / 1e6:.2f} MB" for t, b in zip(tables, parts))
+            + ")"
         )
         figures[f"{label}_object_bytes"] = whole
+        figures[f"{label}_geometry_bytes"] = geometry
         for kind in ("move", "region"):
             version = f"edit_{kind}"
             tgsis.create_version(conn, version)
@@ -264,7 +268,8 @@ def bytes_of_local_edits(
             with tgsis.in_version(conn, version):
                 elapsed, result, counted = timed_checkin(conn, co, edited)
             wal = wal_since(conn, lsn)
-            growth = relation_bytes(conn, tables) - before
+            grew = [a - b for a, b in zip(relation_bytes(conn, tables), before)]
+            growth = sum(grew)
             conn.commit()
             with tgsis.in_version(conn, version):
                 stored = tgsis.fetch_feature(conn, fc, fid).mesh
@@ -274,7 +279,10 @@ def bytes_of_local_edits(
                 f"  {kind}: check-in {elapsed:.2f} s; {save.vertices_moved} vertices moved, "
                 f"{save.property_rows_changed} property rows changed, {save.cells_removed} cells removed and "
                 f"{save.cells_added} added; {counted} tuples written (server count); relations grew "
-                f"{growth / 1e3:.1f} kB = {100 * growth / whole:.2f} %, WAL {wal / 1e3:.1f} kB = {100 * wal / whole:.2f} %"
+                f"{growth / 1e3:.1f} kB = {100 * growth / whole:.2f} % ("
+                + ", ".join(f"{t} {b / 1e3:.1f} kB" for t, b in zip(tables, grew))
+                + f"), WAL {wal / 1e3:.1f} kB = {100 * wal / whole:.2f} %; vertices and triangles alone: "
+                f"{100 * (grew[0] + grew[1]) / geometry:.2f} % of theirs"
             )
             figures[f"{label}_{kind}_checkin_s"] = elapsed
             figures[f"{label}_{kind}_tuples_written"] = counted
@@ -282,6 +290,7 @@ def bytes_of_local_edits(
             figures[f"{label}_{kind}_wal_bytes"] = wal
             figures[f"{label}_{kind}_growth_share_pct"] = 100 * growth / whole
             figures[f"{label}_{kind}_wal_share_pct"] = 100 * wal / whole
+            figures[f"{label}_{kind}_geometry_growth_share_pct"] = 100 * (grew[0] + grew[1]) / geometry
     return figures
 
 
