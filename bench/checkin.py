@@ -22,12 +22,14 @@ versioning on (check-in into DEFAULT: closing a row is an update of its
 ``--bytes`` measures issue 40's figure instead: the bytes a 1 % *spatially
 local* edit writes when checked in as a new version (docs/storage.md, "Issue
 40's figures"). The region is a square of the grid holding 1 % of the
-vertices (100 x 100 of 1000 x 1000), in its middle; two edits of it, each
+vertices (100 x 100 of 1000 x 1000), in its middle; three edits of it, each
 checked in into a child version of DEFAULT (feature versioning on before the
-upload): ``move`` (its vertices' z + 5) and ``region`` (the same, plus their
-porosity changed and the diagonals of the region's quads flipped: 1 % of
-the triangles rewritten). Measured per storage (model 1 in chunks, and in
-rows, each in a database of its own on one server) and per upload order
+upload): ``move`` (its vertices' z + 5), ``move_property`` (the same and
+their porosity changed) and ``region`` (as well the diagonals of the
+region's quads flipped: 1 % of the triangles rewritten). Each check-in's
+result is fetched in its version and compared with the edit. Measured per
+storage (model 1 in chunks, and in rows, each in a database of its own on
+one server) and per upload order
 (``order="file"``: the grid's row-major order; ``order="spatial"``: the
 Morton order of ``tgsis.mesh.spatial_order``): the object's bytes
 (``pg_total_relation_size`` of the storage tables of ``tgsis.vrtx``,
@@ -150,9 +152,10 @@ def grid_positions(mesh: tgsis.Mesh, side: int) -> tuple[np.ndarray, np.ndarray]
 def local_edit(mesh: tgsis.Mesh, side: int, kind: str) -> tgsis.Surface:
     """The square region of 1 % of the vertices in the grid's middle edited, ids and order kept.
 
-    ``move``: its vertices' z + 5. ``region``: also their porosity changed
-    and the diagonals of the quads inside it flipped ((a, b, d), (a, d, c)
-    -> (a, b, c), (b, d, c), each triangle rewritten in its place).
+    ``move``: its vertices' z + 5. ``move_property``: also their porosity
+    changed. ``region``: as well the diagonals of the quads inside it flipped
+    ((a, b, d), (a, d, c) -> (a, b, c), (b, d, c), each triangle rewritten in
+    its place).
     """
     width = max(1, round(side * 0.1))  # width**2 = 1 % of side**2
     low = (side - width) // 2
@@ -161,8 +164,9 @@ def local_edit(mesh: tgsis.Mesh, side: int, kind: str) -> tgsis.Surface:
     vertices, cells = mesh.vertices.copy(), mesh.cells.copy()
     porosity = mesh.vertex_properties["porosity"].copy()
     vertices[inside, 2] += 5.0
-    if kind == "region":
+    if kind in ("move_property", "region"):
         porosity[inside] = 1.0 - porosity[inside]
+    if kind == "region":
         at = np.full((side, side), -1, dtype=np.int64)
         at[row, col] = np.arange(len(row))
         n = len(vertices)
@@ -253,7 +257,7 @@ def bytes_of_local_edits(
         )
         figures[f"{label}_object_bytes"] = whole
         figures[f"{label}_geometry_bytes"] = geometry
-        for kind in ("move", "region"):
+        for kind in ("move", "move_property", "region"):
             version = f"edit_{kind}"
             tgsis.create_version(conn, version)
             conn.commit()
