@@ -24,7 +24,12 @@ growth exponent b fitted by least squares to time ~ size^b over the sizes.
 The first six depend on one object or one change and should show no growth
 (b near 0); the full scan reads everything (b near 1).
 
-    python bench/scale.py [--sizes 1000000 4000000 16000000] [--side 250] [--repeat 3]    # TGSIS_PG=system|embedded
+Model 1 is stored as ``--storage`` says (chunks, the default install, or
+rows); the vertex versions printed are counted in ``tgsis.storage_table``'s
+relation.
+
+    python bench/scale.py [--sizes 1000000 4000000 16000000] [--side 250] [--repeat 3] [--storage chunks|rows]
+                                                                                # TGSIS_PG=system|embedded
 """
 
 from __future__ import annotations
