@@ -41,7 +41,7 @@ check-in through its commit; the throwaway cluster runs full_page_writes
 off, so no full-page images), each as a share of the object's bytes
 (target: at most 2 %).
 
-    python bench/checkin.py [--side 1000] [--repeat 3]      # TGSIS_PG=system|embedded
+    python bench/checkin.py [--side 1000] [--repeat 3] [--storage chunks|rows]      # TGSIS_PG=system|embedded
     python bench/checkin.py --bytes [--side 1000] [--storage chunks rows] [--order file spatial]
 """
 
@@ -321,18 +321,28 @@ def main() -> None:
     parser.add_argument("--side", type=int, default=1000)
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--bytes", action="store_true", help="issue 40's bytes of a 1 %% local edit (above)")
-    parser.add_argument("--storage", nargs="+", choices=("chunks", "rows"), default=["chunks", "rows"])
+    parser.add_argument(
+        "--storage",
+        nargs="+",
+        choices=("chunks", "rows"),
+        default=None,
+        help="model 1's storage: --bytes measures each (default both), the check-in figures one (default chunks)",
+    )
     parser.add_argument("--order", nargs="+", choices=("file", "spatial"), default=["file", "spatial"])
     args = parser.parse_args()
     if args.bytes:
-        bytes_main(args.side, args.storage, args.order)
+        bytes_main(args.side, args.storage or ["chunks", "rows"], args.order)
         return
+    args.storage = args.storage or ["chunks"]
 
     base = grid_surface(args.side)
     mesh_rows = 2 * base.n_vertices + base.n_cells  # vertices, their property rows, triangles
     print(f"surface: {base.n_vertices} vertices, {base.n_cells} triangles ({mesh_rows} rows with the property)")
     figures: dict[str, float] = {}
-    with bench_database() as conn:
+    if len(args.storage) != 1:
+        parser.error("without --bytes, give one --storage (chunks or rows)")
+    print(f"model 1 in {args.storage[0]}")
+    with bench_database(args.storage[0]) as conn:
         fc = tgsis.create_feature_class(conn, "grid", "SURFACE", cell_properties={"porosity": "float8"})
         conn.commit()
 
