@@ -19,7 +19,30 @@ updated + deleted tuples) read before commit. Then the same with feature
 versioning on (check-in into DEFAULT: closing a row is an update of its
 ``lastrevs``). tgsis is installed from the client's SQL sources.
 
-    python bench/checkin.py [--side 1000] [--repeat 3]      # TGSIS_PG=system|embedded
+``--bytes`` measures issue 40's figure instead: the bytes a 1 % *spatially
+local* edit writes when checked in as a new version (docs/storage.md, "Issue
+40's figures"). The region is a square of the grid holding 1 % of the
+vertices (100 x 100 of 1000 x 1000), in its middle; three edits of it, each
+checked in into a child version of DEFAULT (feature versioning on before the
+upload): ``move`` (its vertices' z + 5), ``move_property`` (the same and
+their porosity changed) and ``region`` (as well the diagonals of the
+region's quads flipped: 1 % of the triangles rewritten). Each check-in's
+result is fetched in its version and compared with the edit. Measured per
+storage (model 1 in chunks, and in rows, each in a database of its own on
+one server) and per upload order
+(``order="file"``: the grid's row-major order; ``order="spatial"``: the
+Morton order of ``tgsis.mesh.spatial_order``): the object's bytes
+(``pg_total_relation_size`` of the storage tables of ``tgsis.vrtx``,
+``tgsis.trgl`` and the class's ``grid_cellpros``, named by
+``tgsis.storage_table``, after the upload and VACUUM, the database holding
+only this object), and for each check-in the growth of those relations
+and the WAL written (``pg_current_wal_insert_lsn`` difference over the
+check-in through its commit; the throwaway cluster runs full_page_writes
+off, so no full-page images), each as a share of the object's bytes
+(target: at most 2 %).
+
+    python bench/checkin.py [--side 1000] [--repeat 3] [--storage chunks|rows]      # TGSIS_PG=system|embedded
+    python bench/checkin.py --bytes [--side 1000] [--storage chunks rows] [--order file spatial]
 """
 
 from __future__ import annotations
@@ -31,10 +54,13 @@ from typing import Any
 
 import numpy as np
 import psycopg
+from psycopg import sql
 from timing import bench_database
 from transfer import grid_surface
 
 import tgsis
+from tgsis.db import versions as V
+from tgsis.db.local import LocalServer, find_binaries
 
 Conn = psycopg.Connection[Any]
 
@@ -117,17 +143,206 @@ def timed_checkin(conn: Conn, co: tgsis.Checkout, edited: tgsis.Surface) -> tupl
     return time.perf_counter() - start, result, counted
 
 
+def grid_positions(mesh: tgsis.Mesh, side: int) -> tuple[np.ndarray, np.ndarray]:
+    """Row and column of each vertex of a (renumbered) ``grid_surface(side)``, from its x and y."""
+    step = 10_000 / (side - 1)
+    return np.rint(mesh.vertices[:, 1] / step).astype(np.int64), np.rint(mesh.vertices[:, 0] / step).astype(np.int64)
+
+
+def local_edit(mesh: tgsis.Mesh, side: int, kind: str) -> tgsis.Surface:
+    """The square region of 1 % of the vertices in the grid's middle edited, ids and order kept.
+
+    ``move``: its vertices' z + 5. ``move_property``: also their porosity
+    changed. ``region``: as well the diagonals of the quads inside it flipped
+    ((a, b, d), (a, d, c) -> (a, b, c), (b, d, c), each triangle rewritten in
+    its place).
+    """
+    width = max(1, round(side * 0.1))  # width**2 = 1 % of side**2
+    low = (side - width) // 2
+    row, col = grid_positions(mesh, side)
+    inside = (row >= low) & (row < low + width) & (col >= low) & (col < low + width)
+    vertices, cells = mesh.vertices.copy(), mesh.cells.copy()
+    porosity = mesh.vertex_properties["porosity"].copy()
+    vertices[inside, 2] += 5.0
+    if kind in ("move_property", "region"):
+        porosity[inside] = 1.0 - porosity[inside]
+    if kind == "region":
+        at = np.full((side, side), -1, dtype=np.int64)
+        at[row, col] = np.arange(len(row))
+        n = len(vertices)
+        key = np.sort(cells, axis=1) @ np.array([n * n, n, 1], dtype=np.int64)
+        position = {int(k): i for i, k in enumerate(key)}
+        quads = [(r, c) for r in range(low, low + width - 1) for c in range(low, low + width - 1)]
+        for r, c in quads:
+            a, b, cc, d = at[r, c], at[r, c + 1], at[r + 1, c], at[r + 1, c + 1]
+            first = position[int(np.sort([a, b, d]) @ np.array([n * n, n, 1]))]
+            second = position[int(np.sort([a, d, cc]) @ np.array([n * n, n, 1]))]
+            cells[first], cells[second] = (a, b, cc), (b, d, cc)
+    return tgsis.Surface(vertices, cells, vertex_properties={"porosity": porosity}, name=mesh.name)
+
+
+def same_grid_surface(a: tgsis.Mesh, b: tgsis.Mesh, side: int) -> bool:
+    """Same vertices (bit for bit), porosity and triangles, whatever the numbering (vertices keyed by grid position)."""
+    keys = []
+    for mesh in (a, b):
+        row, col = grid_positions(mesh, side)
+        keys.append(row * side + col)
+    if any(len(np.unique(k)) != len(k) for k in keys) or len(keys[0]) != len(keys[1]):
+        return False
+    order = [np.argsort(k) for k in keys]
+    if not np.array_equal(keys[0][order[0]], keys[1][order[1]]):
+        return False
+    if not np.array_equal(a.vertices[order[0]].view(np.int64), b.vertices[order[1]].view(np.int64)):
+        return False
+    if not np.array_equal(a.vertex_properties["porosity"][order[0]], b.vertex_properties["porosity"][order[1]]):
+        return False
+    cells = [np.sort(np.sort(k[m.cells], axis=1).view([("", np.int64)] * 3).ravel()) for k, m in zip(keys, (a, b))]
+    return bool(np.array_equal(cells[0], cells[1]))
+
+
+def relation_bytes(conn: Conn, tables: list[str]) -> list[int]:
+    """``pg_total_relation_size`` of each table (heap, TOAST, indexes)."""
+    row = conn.execute(
+        sql.SQL("SELECT {}").format(
+            sql.SQL(", ").join(sql.SQL("pg_total_relation_size({}::regclass)").format(sql.Literal(t)) for t in tables)
+        )
+    ).fetchone()
+    assert row is not None
+    return [int(v) for v in row]
+
+
+def wal_lsn(conn: Conn) -> str:
+    row = conn.execute("SELECT pg_current_wal_insert_lsn()::text").fetchone()
+    conn.commit()
+    assert row is not None
+    return str(row[0])
+
+
+def wal_since(conn: Conn, start: str) -> int:
+    row = conn.execute("SELECT pg_current_wal_insert_lsn() - %s::pg_lsn", (start,)).fetchone()
+    conn.commit()
+    assert row is not None
+    return int(row[0])
+
+
+def bytes_of_local_edits(
+    server: LocalServer, base: tgsis.Surface, side: int, storage: str, order: str
+) -> dict[str, float]:
+    """Object bytes, then growth and WAL of each local edit checked in as a new version (one database)."""
+    database = f"bytes_{storage}_{order}"
+    with psycopg.connect(server.dsn(), autocommit=True) as admin:
+        admin.execute(sql.SQL("CREATE DATABASE {}").format(sql.Identifier(database)))
+    figures: dict[str, float] = {}
+    label = f"{storage}_{order}"
+    with psycopg.connect(server.dsn(database)) as conn:
+        tgsis.install(conn, method="sql", storage=storage)  # type: ignore[arg-type]
+        fc = tgsis.create_feature_class(conn, "grid", "SURFACE", cell_properties={"porosity": "float8"})
+        tgsis.enable_feature_versioning(conn)
+        conn.commit()
+        tables = [
+            V.storage_table(conn, s, t) for s, t in (("tgsis", "vrtx"), ("tgsis", "trgl"), ("public", "grid_cellpros"))
+        ]
+        start = time.perf_counter()
+        fid = tgsis.insert_feature(conn, fc, base, order=order)  # type: ignore[arg-type]
+        conn.commit()
+        upload = time.perf_counter() - start
+        vacuum_analyze(conn)
+        parts = relation_bytes(conn, tables)
+        whole, geometry = sum(parts), parts[0] + parts[1]  # geometry: vertices and triangles, without the property
+        conn.commit()
+        print(
+            f"{label}: upload {upload:.2f} s; object {whole / 1e6:.2f} MB ({whole / base.n_vertices:.1f} B/vertex: "
+            + ", ".join(f"{t} {b / 1e6:.2f} MB" for t, b in zip(tables, parts))
+            + ")"
+        )
+        figures[f"{label}_object_bytes"] = whole
+        figures[f"{label}_geometry_bytes"] = geometry
+        for kind in ("move", "move_property", "region"):
+            version = f"edit_{kind}"
+            tgsis.create_version(conn, version)
+            conn.commit()
+            with tgsis.in_version(conn, version):
+                co = tgsis.checkout(conn, fid)
+            assert co.mesh is not None
+            edited = local_edit(co.mesh, side, kind)
+            vacuum_analyze(conn)
+            before = relation_bytes(conn, tables)
+            conn.commit()
+            lsn = wal_lsn(conn)
+            with tgsis.in_version(conn, version):
+                elapsed, result, counted = timed_checkin(conn, co, edited)
+            wal = wal_since(conn, lsn)
+            grew = [a - b for a, b in zip(relation_bytes(conn, tables), before)]
+            growth = sum(grew)
+            conn.commit()
+            with tgsis.in_version(conn, version):
+                stored = tgsis.fetch_feature(conn, fc, fid).mesh
+            assert isinstance(stored, tgsis.Mesh) and same_grid_surface(stored, edited, side), f"{label} {kind}"
+            save = result.save
+            print(
+                f"  {kind}: check-in {elapsed:.2f} s; {save.vertices_moved} vertices moved, "
+                f"{save.property_rows_changed} property rows changed, {save.cells_removed} cells removed and "
+                f"{save.cells_added} added; {counted} tuples written (server count); relations grew "
+                f"{growth / 1e3:.1f} kB = {100 * growth / whole:.2f} % ("
+                + ", ".join(f"{t} {b / 1e3:.1f} kB" for t, b in zip(tables, grew))
+                + f"), WAL {wal / 1e3:.1f} kB = {100 * wal / whole:.2f} %; vertices and triangles alone: "
+                f"{100 * (grew[0] + grew[1]) / geometry:.2f} % of theirs"
+            )
+            figures[f"{label}_{kind}_checkin_s"] = elapsed
+            figures[f"{label}_{kind}_tuples_written"] = counted
+            figures[f"{label}_{kind}_growth_bytes"] = growth
+            figures[f"{label}_{kind}_wal_bytes"] = wal
+            figures[f"{label}_{kind}_growth_share_pct"] = 100 * growth / whole
+            figures[f"{label}_{kind}_wal_share_pct"] = 100 * wal / whole
+            figures[f"{label}_{kind}_geometry_growth_share_pct"] = 100 * (grew[0] + grew[1]) / geometry
+    return figures
+
+
+def bytes_main(side: int, storages: list[str], orders: list[str]) -> None:
+    """Issue 40's figure: bytes written by a 1 % spatially local edit checked in as a new version."""
+    base = grid_surface(side)
+    print(f"surface: {base.n_vertices} vertices, {base.n_cells} triangles, one vertex property (porosity)")
+    binaries = find_binaries()
+    print(f"server: {binaries.describe()} (throwaway cluster, fsync and full_page_writes off)")
+    server = LocalServer.throwaway(binaries)
+    figures: dict[str, float] = {}
+    try:
+        for storage in storages:
+            for order in orders:
+                figures.update(bytes_of_local_edits(server, base, side, storage, order))
+    finally:
+        server.destroy()
+    for name, value in figures.items():
+        print(f"{name}: {value:.4g}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--side", type=int, default=1000)
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--bytes", action="store_true", help="issue 40's bytes of a 1 %% local edit (above)")
+    parser.add_argument(
+        "--storage",
+        nargs="+",
+        choices=("chunks", "rows"),
+        default=None,
+        help="model 1's storage: --bytes measures each (default both), the check-in figures one (default chunks)",
+    )
+    parser.add_argument("--order", nargs="+", choices=("file", "spatial"), default=["file", "spatial"])
     args = parser.parse_args()
+    if args.bytes:
+        bytes_main(args.side, args.storage or ["chunks", "rows"], args.order)
+        return
+    args.storage = args.storage or ["chunks"]
 
     base = grid_surface(args.side)
     mesh_rows = 2 * base.n_vertices + base.n_cells  # vertices, their property rows, triangles
     print(f"surface: {base.n_vertices} vertices, {base.n_cells} triangles ({mesh_rows} rows with the property)")
     figures: dict[str, float] = {}
-    with bench_database() as conn:
+    if len(args.storage) != 1:
+        parser.error("without --bytes, give one --storage (chunks or rows)")
+    print(f"model 1 in {args.storage[0]}")
+    with bench_database(args.storage[0]) as conn:
         fc = tgsis.create_feature_class(conn, "grid", "SURFACE", cell_properties={"porosity": "float8"})
         conn.commit()
 

@@ -24,7 +24,12 @@ growth exponent b fitted by least squares to time ~ size^b over the sizes.
 The first six depend on one object or one change and should show no growth
 (b near 0); the full scan reads everything (b near 1).
 
-    python bench/scale.py [--sizes 1000000 4000000 16000000] [--side 250] [--repeat 3]    # TGSIS_PG=system|embedded
+Model 1 is stored as ``--storage`` says (chunks, the default install, or
+rows); the vertex versions printed are counted in ``tgsis.storage_table``'s
+relation.
+
+    python bench/scale.py [--sizes 1000000 4000000 16000000] [--side 250] [--repeat 3] [--storage chunks|rows]
+                                                                                # TGSIS_PG=system|embedded
 """
 
 from __future__ import annotations
@@ -38,10 +43,12 @@ from typing import Any
 import numpy as np
 import psycopg
 from checkin import one_percent_edit, vacuum_analyze
+from psycopg import sql
 from snapshot import evolving_grid
 from transfer import grid_surface
 
 import tgsis
+from tgsis.db import versions as V
 from tgsis.db.local import LocalServer, find_binaries
 
 Conn = psycopg.Connection[Any]
@@ -105,7 +112,7 @@ def checkin_edit(conn: Conn, geoid: int, seed: int) -> float:
     return elapsed
 
 
-def measure(server: LocalServer, vertices: int, side: int, repeat: int) -> dict[str, float]:
+def measure(server: LocalServer, vertices: int, side: int, repeat: int, storage: str) -> dict[str, float]:
     database = f"scale_{vertices}"
     base = grid_surface(side)
     base = tgsis.Surface(base.vertices, base.cells, vertex_properties=base.vertex_properties)
@@ -114,16 +121,18 @@ def measure(server: LocalServer, vertices: int, side: int, repeat: int) -> dict[
     with psycopg.connect(server.dsn(), autocommit=True) as admin:
         admin.execute(f"CREATE DATABASE {database}")
     with psycopg.connect(server.dsn(database)) as conn:
-        tgsis.install(conn, method="sql")  # this checkout's SQL
+        tgsis.install(conn, method="sql", storage=storage)  # type: ignore[arg-type]  # this checkout's SQL
         started = time.perf_counter()
         ids, evolving = load(conn, base, count, columns)
         loaded = time.perf_counter() - started
-        stored = conn.execute("SELECT count(*) FROM tgsis.vrtx_ver").fetchone()
+        vrtx = V.storage_table(conn, "tgsis", "vrtx")  # tgsis.vrtx_chunk (default) or tgsis.vrtx_ver
+        stored = conn.execute(sql.SQL("SELECT count(*) FROM {}").format(sql.SQL(vrtx))).fetchone()
         size = conn.execute("SELECT pg_database_size(current_database())").fetchone()
         assert stored is not None and size is not None
+        unit = "chunk versions" if vrtx.endswith("_chunk") else "row versions"
         print(
             f"{count * base.n_vertices:>11,} vertices: {count} surfaces of {base.n_vertices:,}, loaded in "
-            f"{loaded:.0f} s; {stored[0]:,} vertex row versions, database {size[0] / 1e9:.2f} GB"
+            f"{loaded:.0f} s; {stored[0]:,} {unit} in {vrtx}, database {size[0] / 1e9:.2f} GB"
         )
 
         extra = placed(base, count + columns, columns)  # a free cell of the layout
@@ -203,13 +212,16 @@ def main() -> None:
     parser.add_argument("--sizes", type=int, nargs="+", default=[1_000_000, 4_000_000, 16_000_000])
     parser.add_argument("--side", type=int, default=250)
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--storage", choices=("chunks", "rows"), default="chunks", help="model 1's storage")
     args = parser.parse_args()
 
     binaries = find_binaries()
-    print(f"server: {binaries.describe()} (throwaway cluster, fsync off); medians of {args.repeat}")
+    print(
+        f"server: {binaries.describe()} (throwaway cluster, fsync off); medians of {args.repeat}; model 1 in {args.storage}"
+    )
     server = LocalServer.throwaway(binaries)
     try:
-        figures = {size: measure(server, size, args.side, args.repeat) for size in args.sizes}
+        figures = {size: measure(server, size, args.side, args.repeat, args.storage) for size in args.sizes}
     finally:
         server.destroy()
 

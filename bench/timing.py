@@ -38,13 +38,14 @@ def paired(actions: list[Callable[[], object]], repeat: int) -> list[float]:
 
 
 @contextlib.contextmanager
-def bench_database() -> Iterator[psycopg.Connection[Any]]:
+def bench_database(storage: str = "chunks") -> Iterator[psycopg.Connection[Any]]:
     """A connection to a database ``bench`` with tgsis, on a throwaway cluster stopped afterwards.
 
     The server comes from ``TGSIS_PG`` (system or embedded, see
     :func:`tgsis.db.local.find_binaries`); tgsis is installed from the client's
     own SQL sources, not from an extension some other build put in the
     server's share dir, so the functions measured are this checkout's.
+    ``storage``: model 1's storage (``chunks``, the default install, or ``rows``).
     """
     binaries = find_binaries()
     print(f"server: {binaries.describe()} (throwaway cluster, fsync off)")
@@ -53,7 +54,7 @@ def bench_database() -> Iterator[psycopg.Connection[Any]]:
         with psycopg.connect(server.dsn(), autocommit=True) as admin:
             admin.execute("CREATE DATABASE bench")
         with psycopg.connect(server.dsn("bench")) as conn:
-            tgsis.install(conn, method="sql")
+            tgsis.install(conn, method="sql", storage=storage)  # type: ignore[arg-type]
             yield conn
     finally:
         server.destroy()
