@@ -699,7 +699,7 @@ def partition_model_storage(conn: psycopg.Connection[Any], model: int, partition
         2 to 1024, and no more than the server's lock table holds
         (``max_locks_per_transaction`` x (``max_connections`` +
         ``max_prepared_transactions``) locks, about 4 per partition of each
-        table; docs/scaling.md): on a default server 221 for model 1.
+        table; docs/scaling.md): on a default server 218 for model 1 (row storage).
 
     Returns
     -------
