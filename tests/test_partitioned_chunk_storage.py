@@ -2,8 +2,8 @@
 
 ``tgsis.partition_model_storage`` hash-partitions the chunk table
 ``tgsis.<table>_chunk`` of a table stored in chunks by geoid, as it partitions
-row storage, and unlike row storage with its data and under versioning: the
-chunk versions are moved (verified bit for bit), and the face ``tgsis.<table>``,
+row storage, with its data and under versioning (as row storage since
+2026-12-06, tgsis.partition_row_storage): the chunk versions are moved (verified bit for bit), and the face ``tgsis.<table>``,
 the chunk view, the rights, the row-level security and the guards of a versioned
 table are made again (``tgsis.partition_chunk_storage``). Each test stores
 model 1 in chunks first when the harness installed rows, so the module runs the
@@ -144,16 +144,13 @@ def test_versioned_chunks_are_partitioned_with_every_version_kept(db_dsn: str, c
     guards = _triggers(conn, "tgsis.vrtx_chunk")
     assert guards  # versioned chunk storage is guarded
 
-    # model 1's atom and part stay rows: versioned, they refuse partition_model_storage by name, nothing changed
-    with pytest.raises(tgsis.InUseError, match=r"tgsis\.atom is not a plain table"):
-        tgsis.partition_model_storage(conn, 1, PARTITIONS)
-    conn.rollback()
-    assert _kinds(conn) == {t: ("r", 0) for t in CHUNKED}
     # the chunk layer's part partitions versioned chunk tables with their data (as the storage switch of
-    # partitioned rows does)
-    for table in CHUNKED:
-        conn.execute("SELECT tgsis.partition_chunk_storage(%s, %s)", (table, PARTITIONS))
+    # partitioned rows does); model 1's atom and part stay rows, versioned, partitioned with their rows
+    # (tgsis.partition_row_storage; before 2026-12-06 they refused partition_model_storage by name)
+    atoms = conn.execute("SELECT * FROM tgsis.atom_ver ORDER BY 1, 2, 3").fetchall()
+    assert "atom" in tgsis.partition_model_storage(conn, 1, PARTITIONS)
     conn.commit()
+    assert conn.execute("SELECT * FROM tgsis.atom_ver ORDER BY 1, 2, 3").fetchall() == atoms
     assert _kinds(conn) == {t: ("p", PARTITIONS) for t in CHUNKED}
     assert _chunk_rows(conn) == chunks  # every chunk version, with its revision and lastrevs
     assert _seen(conn) == seen  # so every version and kept revision sees what it saw

@@ -261,20 +261,27 @@ def test_bad_calls_are_refused(conn: Conn, model: int, partitions: int, error: t
         tgsis.partition_model_storage(conn, model, partitions)
 
 
-def test_storage_with_rows_or_versioning_is_refused_and_left_as_it_was(conn: Conn, horizons: Any) -> None:
+def test_storage_with_rows_and_versioning_is_partitioned_with_its_rows(conn: Conn, horizons: Any) -> None:
+    """Rows are moved and verified (tgsis.partition_row_storage; until 2026-12-06 refused: TG202 'holds rows', and
+    'is not a plain table' once versioned). tests/test_partition_with_data.py checks every version of model 1."""
     geoid = tgsis.insert_feature(conn, horizons, _grid(3))  # model 1 (partitioned by the fixture) holds rows
     conn.commit()
-    tables = [r[0] for r in conn.execute("SELECT tablename FROM tgsis.model_tables WHERE model = 2").fetchall()]
-    conn.execute("INSERT INTO tgsis.times (geoid, times) SELECT %s, 0.0", (geoid,))  # a row in one model-2 table
-    before = {t: _definition(conn, t) for t in tables}
-    with pytest.raises(tgsis.InUseError, match=r"tgsis\.times holds rows") as caught:
-        tgsis.partition_model_storage(conn, 2, 4)
-    assert "before storing data" in (caught.value.hint or "")
-    conn.rollback()
-    assert {t: _definition(conn, t) for t in tables} == before  # none of the model's tables changed
     tgsis.enable_feature_versioning(conn)
-    with pytest.raises(tgsis.InUseError, match="is not a plain table"):
-        tgsis.partition_model_storage(conn, 2, 4)
+    conn.execute("INSERT INTO tgsis.times (geoid, times) SELECT %s, 0.0", (geoid,))  # a row in one model-2 table
+    conn.execute("INSERT INTO tgsis.times (geoid, times) SELECT %s, -1e-310", (geoid,))  # a subnormal
+    conn.commit()
+    tables = [r[0] for r in conn.execute("SELECT tablename FROM tgsis.model_tables WHERE model = 2").fetchall()]
+    stored = conn.execute(
+        "SELECT geoid, float8send(times), revision, lastrevs FROM tgsis.times_ver ORDER BY 2"
+    ).fetchall()
+    assert len(stored) == 2
+    assert sorted(tgsis.partition_model_storage(conn, 2, 4)) == sorted(tables)
+    conn.commit()
+    for table in tables:
+        assert len(_partitions(conn, _storage(conn, table))) == 4, table
+    after = conn.execute("SELECT geoid, float8send(times), revision, lastrevs FROM tgsis.times_ver ORDER BY 2")
+    assert after.fetchall() == stored  # bit for bit
+    assert conn.execute("SELECT count(*) FROM tgsis.times").fetchone() == (2,)
 
 
 def test_only_the_owner_partitions(db_dsn: str) -> None:
@@ -299,8 +306,15 @@ def test_only_the_owner_partitions(db_dsn: str) -> None:
             "constraint picks_instant on table public.picks",
             "DROP TABLE public.picks",
         ),
+        # a user's trigger: LIKE ... INCLUDING ALL copies none, the swap dropped it without a word
+        (
+            "CREATE FUNCTION public.note_times() RETURNS trigger LANGUAGE plpgsql AS $$BEGIN RETURN NEW; END$$; "
+            "CREATE TRIGGER note_times BEFORE INSERT ON tgsis.times FOR EACH ROW EXECUTE FUNCTION public.note_times()",
+            "trigger note_times on tgsis.times",
+            "DROP TRIGGER note_times ON tgsis.times",
+        ),
     ],
-    ids=["view", "foreign-key"],
+    ids=["view", "foreign-key", "trigger"],
 )
 def test_a_table_other_objects_use_is_refused_naming_them(conn: Conn, create: str, user: str, drop: str) -> None:
     conn.execute(create)
@@ -327,13 +341,11 @@ def test_a_writer_in_flight_is_waited_for(db_dsn: str, conn: Conn, writer_commit
         call = Background(db_dsn, "partition", lambda c: tgsis.partition_model_storage(c, 2, 4))
         wait_until_blocked(conn, call.pid, writer.info.backend_pid)
         writer.commit() if writer_commits else writer.rollback()
-        if writer_commits:  # the row it waited for is there: refused, nothing changed
-            with pytest.raises(tgsis.InUseError, match=r"tgsis\.times holds rows"):
-                call.finish()
-            assert conn.execute("SELECT relkind FROM pg_class WHERE oid = 'tgsis.times'::regclass").fetchone() == ("r",)
-        else:
-            assert "times" in call.finish()
-            assert conn.execute("SELECT relkind FROM pg_class WHERE oid = 'tgsis.times'::regclass").fetchone() == ("p",)
+        assert "times" in call.finish()
+        assert conn.execute("SELECT relkind FROM pg_class WHERE oid = 'tgsis.times'::regclass").fetchone() == ("p",)
+        # the row it waited for, committed, was moved into the partitioned table (before 2026-12-06: refused)
+        rows = conn.execute("SELECT count(*) FROM tgsis.times WHERE geoid = 1").fetchone()
+        assert rows == ((1,) if writer_commits else (0,))
     finally:
         writer.close()
 

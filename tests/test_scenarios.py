@@ -333,12 +333,14 @@ def test_merge(db_dsn: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]) 
         ).fetchone()
     assert row is not None
     chunked, chunksize = bool(row[0]), int(row[1])
-    # in chunks: each vertex chunk bob's moves are in, closed and written anew, and the fault's box
-    into_default = 2 * len(np.unique(b // chunksize)) + 2 if chunked else 2 * len(b) + 2
-    unit = "chunk versions" if chunked else "rows"
+    # in chunks: each vertex chunk bob's moves are in, closed and written anew (chunk versions), and the fault's
+    # box (its geometry row closed and written anew: rows), each unit counted apart (MergeResult)
+    into_default = (
+        f"{2 * len(np.unique(b // chunksize))} chunk versions and 2 rows" if chunked else f"{2 * len(b) + 2} rows"
+    )
     assert (
         f"{into_south_tip} rows written into south_tip (the merged fault, by id: ann's moves), then "
-        f"{into_default} {unit} into DEFAULT (only what it did not hold: bob's moves, "
+        f"{into_default} into DEFAULT (only what it did not hold: bob's moves, "
     ) in out
 
     # the merge of north_review: one conflict region, exactly ann's and cat's moved vertices and the triangles

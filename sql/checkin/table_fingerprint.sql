@@ -19,6 +19,13 @@
 -- equal; a fingerprint taken on rows never equals one taken on chunks (a
 -- check-out from before the storage switch is refused once at check-in,
 -- TG304).
+-- The seed is (id << 6) # position: id * 64 + position wherever that fits a
+-- bigint and the position is below 64 (the same fingerprint as 0.2.0's
+-- id * 64 + position), and no error for an id of 2**57 or more, which the
+-- product failed on ("bigint out of range": such an object could not be checked
+-- out). For a column at position 64 or more the seed differs from 0.2.0's: a
+-- check-out of such a wide class from before the upgrade is refused once at
+-- check-in (TG304).
 -- Values hashed as text (timestamps, dates, the geometry row) are written
 -- with fixed settings: a check-out in one session and a check-in in another
 -- (another TimeZone, DateStyle or extra_float_digits) compare the same text.
@@ -61,14 +68,14 @@ BEGIN
     SELECT string_agg(format(
                'coalesce(%s, %s)',
                CASE t.typname
-                   WHEN 'int8' THEN format('hashint8extended(r.%I, r.%I * 64 + %s)', a.attname, p_idfield, a.attnum)
-                   WHEN 'int4' THEN format('hashint4extended(r.%I, r.%I * 64 + %s)', a.attname, p_idfield, a.attnum)
-                   WHEN 'int2' THEN format('hashint4extended(r.%I, r.%I * 64 + %s)', a.attname, p_idfield, a.attnum)
-                   WHEN 'bool' THEN format('hashint4extended(r.%I::int, r.%I * 64 + %s)', a.attname, p_idfield, a.attnum)
-                   WHEN 'float8' THEN format('hashfloat8extended(r.%I, r.%I * 64 + %s)', a.attname, p_idfield, a.attnum)
-                   WHEN 'float4' THEN format('hashfloat8extended(r.%I, r.%I * 64 + %s)', a.attname, p_idfield, a.attnum)
-                   WHEN 'numeric' THEN format('hash_numeric_extended(r.%I, r.%I * 64 + %s)', a.attname, p_idfield, a.attnum)
-                   ELSE format('hashtextextended(r.%I::text, r.%I * 64 + %s)', a.attname, p_idfield, a.attnum)
+                   WHEN 'int8' THEN format('hashint8extended(r.%I, (r.%I << 6) # %s)', a.attname, p_idfield, a.attnum)
+                   WHEN 'int4' THEN format('hashint4extended(r.%I, (r.%I << 6) # %s)', a.attname, p_idfield, a.attnum)
+                   WHEN 'int2' THEN format('hashint4extended(r.%I, (r.%I << 6) # %s)', a.attname, p_idfield, a.attnum)
+                   WHEN 'bool' THEN format('hashint4extended(r.%I::int, (r.%I << 6) # %s)', a.attname, p_idfield, a.attnum)
+                   WHEN 'float8' THEN format('hashfloat8extended(r.%I, (r.%I << 6) # %s)', a.attname, p_idfield, a.attnum)
+                   WHEN 'float4' THEN format('hashfloat8extended(r.%I, (r.%I << 6) # %s)', a.attname, p_idfield, a.attnum)
+                   WHEN 'numeric' THEN format('hash_numeric_extended(r.%I, (r.%I << 6) # %s)', a.attname, p_idfield, a.attnum)
+                   ELSE format('hashtextextended(r.%I::text, (r.%I << 6) # %s)', a.attname, p_idfield, a.attnum)
                END,
                a.attnum), ' # ' ORDER BY a.attnum)
       INTO v_hash

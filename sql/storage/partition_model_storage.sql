@@ -1,14 +1,20 @@
--- tgsis.partition_model_storage(model, partitions): hash-partition the empty storage tables of a data model by geoid.
--- For a database that will outgrow plain tables (docs/scaling.md): each
--- table of the model (tgsis.model_tables) is replaced by a table of the
--- same definition (LIKE ... INCLUDING ALL: columns, defaults, checks, keys,
--- indexes and their names, comments, owner, the group roles' rights)
--- partitioned by HASH (geoid) in p_partitions partitions. Every key of the
--- model tables starts with geoid, so the keys (and the (keys..., revision)
--- of versioned storage) contain the partition key. Only before data is
--- stored and before feature versioning: the tables are locked, checked to
--- be plain, empty, keyed by geoid first and used by no view, foreign key or
--- function body, and then swapped, all in the
+-- tgsis.partition_model_storage(model, partitions): hash-partition the storage tables of a data model by geoid, their rows kept.
+-- For a database that will outgrow plain tables (docs/scaling.md): the
+-- storage of each table of the model (tgsis.model_tables) is replaced by a
+-- table of the same definition (LIKE ... INCLUDING ALL: columns, defaults,
+-- checks, keys, indexes and their names, comments, owner, the group roles'
+-- rights) partitioned by HASH (geoid) in p_partitions partitions. Every key
+-- of the model tables starts with geoid, so the keys (and the (keys...,
+-- revision) of versioned storage) contain the partition key. The storage of
+-- a row table is the table while plain, <table>_ver once versioned
+-- (tgsis.partition_row_storage): its rows, versioned or not, are moved and
+-- verified bit for bit, the versioned view made again over it (until this
+-- session's change the row path needed the tables empty and unversioned, so
+-- a versioned model 1 with data, whose atom and part stay rows beside its
+-- chunk tables, was refused). The tables are locked, all checked first
+-- (plain storage, keyed by geoid first, used by no view, foreign key,
+-- function body or user's trigger — LIKE copies no trigger: refused by name,
+-- TG202, as the chunk path refuses one) and then swapped, all in the
 -- caller's transaction, so that a refusal changes nothing and no row can be
 -- written between the check and the swap. The core tables (model 0:
 -- tgsis.geometry and the model sets, with identities and foreign keys) stay
@@ -26,7 +32,8 @@
 -- call needing more failed half-way with 53200 out of shared memory (model 1
 -- in 512 partitions on a default server). The locks a call needs are
 -- estimated from the model's tables before anything is done: per partition
--- of each table 2 + 2 per index + 3 for TOAST, plus 30 per table (measured:
+-- of each table 2 + 2 per index + 3 for TOAST, plus 40 per table (30 before the row path moved
+-- rows: its copied policies and old table held 21 locks more for model 1 on rows; measured:
 -- the estimate is at or above the locks held on PostgreSQL 15 and 18), and a
 -- call needing more than that documented size is refused (TG100) with the
 -- largest number of partitions the server takes, nothing changed.
@@ -39,16 +46,6 @@ AS $$
 DECLARE
     v_tables  text[];
     v_table   text;
-    v_rel     regclass;
-    v_kind    "char";
-    v_owner   name;
-    v_comment text;
-    v_users   text;
-    v_index   record;
-    v_names   text[];
-    v_defs    text[];
-    v_rows    boolean;
-    v_new     regclass;
     v_cost    bigint;
     v_fixed   bigint;
     v_room    bigint;
@@ -73,11 +70,10 @@ BEGIN
 
     -- the locks the call will hold at its end, against the lock table's documented size
     SELECT sum(2 + 2 * (SELECT count(*) FROM pg_index i WHERE i.indrelid = c.oid)
-               + CASE WHEN c.reltoastrelid <> 0 THEN 3 ELSE 0 END), 30 * count(*)
+               + CASE WHEN c.reltoastrelid <> 0 THEN 3 ELSE 0 END), 40 * count(*)
       INTO v_cost, v_fixed
       FROM unnest(v_tables) AS t(tablename)
-      JOIN pg_class c ON c.oid = to_regclass(format('tgsis.%I', t.tablename || CASE WHEN tgsis.stored_in_chunks(t.tablename)
-                                                                                     THEN '_chunk' ELSE '' END));
+      JOIN pg_class c ON c.oid = tgsis.storage_table('tgsis', t.tablename)::regclass;  -- <table>, <table>_ver or _chunk
     v_room := current_setting('max_locks_per_transaction')::bigint
               * (current_setting('max_connections')::bigint + current_setting('max_prepared_transactions')::bigint);
     IF p_partitions * v_cost + v_fixed > v_room THEN
@@ -98,50 +94,8 @@ BEGIN
             PERFORM tgsis.partition_chunk_storage(v_table, p_partitions, true);
             CONTINUE;
         END IF;
-        IF to_regclass(format('tgsis.%I', v_table)) IS NOT NULL THEN
-            -- first the lock (it waits for writers, and for a concurrent call, whose tables the name then gives)
-            EXECUTE format('LOCK TABLE tgsis.%I IN ACCESS EXCLUSIVE MODE', v_table);
-        END IF;
-        v_rel := to_regclass(format('tgsis.%I', v_table));
-        SELECT c.relkind INTO v_kind FROM pg_class c WHERE c.oid = v_rel;
-        IF v_rel IS NULL OR v_kind <> 'r' THEN
-            RAISE EXCEPTION 'tgsis.% is not a plain table', v_table
-                USING ERRCODE = 'TG202',
-                      DETAIL = CASE v_kind WHEN 'p' THEN 'it is partitioned already'
-                                           WHEN 'v' THEN 'feature versioning made it a view of tgsis.' || v_table || '_ver'
-                                           ELSE 'it is missing' END,
-                      HINT = 'partition the model tables once, before storing data and before tgsis.enable_feature_versioning()';
-        END IF;
-        -- what refers to the table (views, foreign keys, SQL-standard function bodies) would block the swap
-        SELECT string_agg(DISTINCT CASE WHEN d.classid = 'pg_rewrite'::regclass
-                                        THEN (SELECT 'view ' || r.ev_class::regclass::text FROM pg_rewrite r WHERE r.oid = d.objid)
-                                        ELSE pg_describe_object(d.classid, d.objid, 0) END, ', ') INTO v_users
-          FROM pg_depend d
-         WHERE d.refclassid = 'pg_class'::regclass AND d.refobjid = v_rel AND d.deptype = 'n'
-           AND NOT (d.classid = 'pg_constraint'::regclass        -- the table's own checks name its columns
-                    AND EXISTS (SELECT FROM pg_constraint c WHERE c.oid = d.objid AND c.conrelid = v_rel))
-           AND NOT (d.classid = 'pg_trigger'::regclass
-                    AND EXISTS (SELECT FROM pg_trigger t WHERE t.oid = d.objid AND t.tgrelid = v_rel))
-           AND NOT (d.classid = 'pg_policy'::regclass            -- its own policies (made again after the swap)
-                    AND EXISTS (SELECT FROM pg_policy p WHERE p.oid = d.objid AND p.polrelid = v_rel))
-           AND d.classid <> 'pg_attrdef'::regclass;
-        IF v_users IS NOT NULL THEN
-            RAISE EXCEPTION 'tgsis.% is used by other objects', v_table
-                USING ERRCODE = 'TG202', DETAIL = 'used by: ' || v_users,
-                      HINT = 'drop them, partition the model tables, then create them again';
-        END IF;
-        IF NOT EXISTS (SELECT FROM pg_constraint k JOIN pg_attribute a ON a.attrelid = k.conrelid AND a.attnum = k.conkey[1]
-                        WHERE k.conrelid = v_rel AND k.contype = 'p' AND a.attname = 'geoid') THEN
-            RAISE EXCEPTION 'tgsis.% is not keyed by geoid first', v_table
-                USING ERRCODE = 'TG202', HINT = 'only tables whose primary key starts with geoid can be partitioned by it';
-        END IF;
-        EXECUTE format('SELECT EXISTS (SELECT FROM tgsis.%I)', v_table) INTO STRICT v_rows;
-        IF v_rows THEN
-            RAISE EXCEPTION 'tgsis.% holds rows', v_table
-                USING ERRCODE = 'TG202',
-                      DETAIL = 'its rows would have to be moved; partitioning is for storage that is still empty',
-                      HINT = 'partition the model tables before storing data (a dump restored into a partitioned database keeps its rows)';
-        END IF;
+        -- the row storage (the table, or <table>_ver once versioned): locked and checked, kept with its rows
+        PERFORM tgsis.partition_row_storage(v_table, p_partitions, true);
     END LOOP;
 
     FOREACH v_table IN ARRAY v_tables LOOP
@@ -150,30 +104,9 @@ BEGIN
             CONTINUE;
         END IF;
         v_swapped := true;
-        v_rel := format('tgsis.%I', v_table)::regclass;
-        SELECT c.relowner::regrole::name, obj_description(c.oid, 'pg_class') INTO v_owner, v_comment
-          FROM pg_class c WHERE c.oid = v_rel;
-        -- the indexes' names, by what each indexes (the text after USING), for the new table's indexes to take
-        SELECT array_agg(c.relname::text ORDER BY c.relname), array_agg(split_part(pg_get_indexdef(i.indexrelid), ' USING ', 2) ORDER BY c.relname)
-          INTO v_names, v_defs
-          FROM pg_index i JOIN pg_class c ON c.oid = i.indexrelid WHERE i.indrelid = v_rel;
-        EXECUTE format('ALTER TABLE tgsis.%I RENAME TO %I', v_table, 'tgsis_old_' || v_table);
-        EXECUTE format('CREATE TABLE tgsis.%I (LIKE tgsis.%I INCLUDING ALL) PARTITION BY HASH (geoid)',
-                       v_table, 'tgsis_old_' || v_table);
-        EXECUTE format('DROP TABLE tgsis.%I', 'tgsis_old_' || v_table);
-        v_new := format('tgsis.%I', v_table)::regclass;
-        FOR v_index IN SELECT i.indexrelid::regclass AS idx, c.relname::text AS name,
-                              v_names[array_position(v_defs, split_part(pg_get_indexdef(i.indexrelid), ' USING ', 2))] AS old
-                         FROM pg_index i JOIN pg_class c ON c.oid = i.indexrelid WHERE i.indrelid = v_new LOOP
-            IF v_index.old IS NOT NULL AND v_index.old <> v_index.name THEN
-                EXECUTE format('ALTER INDEX %s RENAME TO %I', v_index.idx, v_index.old);  -- a key's constraint too
-            END IF;
-        END LOOP;
-        EXECUTE format('ALTER TABLE tgsis.%I OWNER TO %I', v_table, v_owner);
-        EXECUTE format('COMMENT ON TABLE tgsis.%I IS %L', v_table, v_comment);
-        PERFORM tgsis.create_hash_partitions(v_table, p_partitions, v_owner);
+        PERFORM tgsis.partition_row_storage(v_table, p_partitions);
     END LOOP;
-    IF v_swapped THEN  -- the row tables made again (a chunk table keeps its own rights)
+    IF v_swapped THEN  -- the group roles' rights and the policies given again (idempotent)
         PERFORM tgsis.grant_model_tables(p_model);
         PERFORM tgsis.protect_model_tables(p_model);  -- LIKE ... INCLUDING ALL copies no policies
     END IF;
@@ -184,4 +117,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.partition_model_storage(smallint, integer) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.partition_model_storage(smallint, integer) IS
-    'hash-partition the empty storage tables of a data model (1 to 5) by geoid in 2 to 1024 partitions (the chunk tables of tables stored in chunks with their data, versioned or not: tgsis.partition_chunk_storage) (at most what the server''s lock table holds: max_locks_per_transaction x (max_connections + max_prepared_transactions) locks, about 4 per partition of each table; TG100 naming the largest number otherwise), keeping their definitions, index names, comments, owner, rights and per-class row-level security; refused (and nothing changed) when a table holds rows, is versioned or partitioned already; returns the tables';
+    'hash-partition the storage tables of a data model (1 to 5) by geoid in 2 to 1024 partitions with their data, versioned or not (row storage: tgsis.partition_row_storage; the chunk tables of tables stored in chunks: tgsis.partition_chunk_storage) (at most what the server''s lock table holds: max_locks_per_transaction x (max_connections + max_prepared_transactions) locks, about 4 per partition of each table; TG100 naming the largest number otherwise), keeping their definitions, index names, comments, owner, rights and per-class row-level security; refused (and nothing changed) when a table is partitioned already or used by other objects; returns the tables';

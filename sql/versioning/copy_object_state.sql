@@ -27,7 +27,11 @@
 -- The objects are noted as changed in revision (tgsis.revision_objects) in the
 -- tables where rows were written; an object with nothing written looks in
 -- to_set as in from_set already and is not noted.
--- Returns the rows written (closed, deleted and copied).
+-- Returns the rows written (closed, deleted and copied): rows of row storage
+-- and chunk versions of chunk storage alike. The chunk versions among them are
+-- also added to the transaction's setting tgsis.chunk_versions_written (set
+-- LOCAL; a value that is not a count restarts it from 0), so that a caller who
+-- set it to 0 before reads the two units apart (tgsis.db.merging.MergeResult).
 CREATE FUNCTION tgsis.copy_object_state(
     p_objectclass text,
     p_keys        text[],
@@ -52,6 +56,8 @@ DECLARE
     v_keytype text;
     v_count   bigint;
     v_written bigint := 0;
+    v_chunks  bigint := 0;  -- of v_written: chunk versions (tables stored in chunks)
+    v_chunked boolean;
     v_same    text;
     v_changed text;  -- (v.revision in the symmetric difference, or v closed in one of its revisions)
     -- visible only in p_to, only in p_from (rows f of the storage): the rows copy_object_state acts on
@@ -72,6 +78,7 @@ BEGIN
     -- copies made first would look like rows to close
     FOR v_t IN SELECT * FROM tgsis.versioned_tables WHERE objectclass = p_objectclass ORDER BY iudorder DESC, shortname LOOP
         v_ver := tgsis.storage_table(v_t.schemaname, v_t.tablename);  -- <table>_ver, or tgsis.<table>_chunk
+        v_chunked := v_ver <> format('%I.%I', v_t.schemaname, v_t.tablename || '_ver');
         v_keytype := tgsis.object_key_type(v_t);  -- keys compared in the column's own type, so that its index serves
         -- a row v only p_to sees stays when its key's one row only p_from sees holds its content
         v_same := tgsis.copy_object_match_sql(v_t, v_to_only, v_from_only);
@@ -84,6 +91,7 @@ BEGIN
             v_ver, v_t.objectkeyfield, v_keytype, v_changed, v_same),
             p_keys, p_from, p_to, p_revision) AS r;
         v_written := v_written + v_count;
+        v_chunks := v_chunks + CASE WHEN v_chunked THEN v_count ELSE 0 END;
         -- other versions see these rows too (the siblings of a merged version share
         -- the parent's rows): closed without waiting for one while holding others
         v_count := tgsis.update_shared_rows(v_t, 'lastrevs = v.lastrevs || $4', format(
@@ -93,6 +101,7 @@ BEGIN
                 AND NOT %s',
             v_t.objectkeyfield, v_keytype, v_changed, v_same), p_keys, p_from, p_to, p_revision);
         v_written := v_written + v_count;
+        v_chunks := v_chunks + CASE WHEN v_chunked THEN v_count ELSE 0 END;
         IF v_count > 0 THEN
             -- closed in p_revision: noted for the next merge or conflict check (tgsis.revision_objects)
             PERFORM tgsis.note_changed_objects(v_t.schemaname, v_t.tablename, p_revision, p_keys);
@@ -100,6 +109,7 @@ BEGIN
     END LOOP;
     FOR v_t IN SELECT * FROM tgsis.versioned_tables WHERE objectclass = p_objectclass ORDER BY iudorder, shortname LOOP
         v_ver := tgsis.storage_table(v_t.schemaname, v_t.tablename);  -- <table>_ver, or tgsis.<table>_chunk
+        v_chunked := v_ver <> format('%I.%I', v_t.schemaname, v_t.tablename || '_ver');
         -- every stored column but the generated ones; a fresh revision, nothing closed
         SELECT string_agg(format('%I', attname), ', ' ORDER BY attnum) INTO v_cols
           FROM pg_catalog.pg_attribute
@@ -119,14 +129,21 @@ BEGIN
             v_ver, v_cols, v_cols, v_ver, v_t.objectkeyfield, v_keytype, v_changed, v_same),
             p_keys, p_from, p_to, p_revision) AS r;
         v_written := v_written + v_count;
+        v_chunks := v_chunks + CASE WHEN v_chunked THEN v_count ELSE 0 END;
         IF v_count > 0 THEN
             -- (the storage's statement trigger notes them too, unless this runs inside a trigger)
             PERFORM tgsis.note_changed_objects(v_t.schemaname, v_t.tablename, p_revision, p_keys);
         END IF;
     END LOOP;
+    IF v_chunks > 0 THEN
+        PERFORM set_config('tgsis.chunk_versions_written',
+                           (CASE WHEN current_setting('tgsis.chunk_versions_written', true) ~ '^[0-9]{1,18}$'
+                                 THEN current_setting('tgsis.chunk_versions_written', true)::bigint ELSE 0 END
+                            + v_chunks)::text, true);
+    END IF;
     RETURN v_written;
 END
 $$;
 
 COMMENT ON FUNCTION tgsis.copy_object_state(text, text[], integer[], integer[], integer) IS
-    'make objects of a class look in revision set p_to (plus p_revision) as they look in p_from: close or delete rows only p_to sees, copy rows only p_from sees, except a row key''s one row only p_to sees when the one only p_from sees holds exactly its content (then both are left alone); returns rows written';
+    'make objects of a class look in revision set p_to (plus p_revision) as they look in p_from: close or delete rows only p_to sees, copy rows only p_from sees, except a row key''s one row only p_to sees when the one only p_from sees holds exactly its content (then both are left alone); returns rows written (rows and chunk versions; the chunk versions also added to the transaction''s setting tgsis.chunk_versions_written)';

@@ -296,6 +296,34 @@ def _next_id(conn: Conn, storage: Storage, table: str, key: str, idfield: str, g
     return 0 if row is None or row[0] is None else int(row[0]) + 1
 
 
+#: the largest local id: the id columns are bigint
+_LARGEST_ID = 2**63 - 1
+
+
+def _fresh_ids(conn: Conn, storage: Storage, table: str, idfield: str, geoid: int, n: int) -> IntArray:
+    """(n,) ids for ``n`` new rows of ``table``: above every id the object has ever had (:func:`_next_id`).
+
+    Raises
+    ------
+    InvalidInputError
+        The object's ids (of some version, in ``table``'s storage) reach so
+        high that ``n`` more pass the largest bigint: refused before anything
+        is written (the ids would wrap to negative ones, or fail in the server).
+    """
+    if n == 0:
+        return np.empty(0, dtype=np.int64)
+    first = _next_id(conn, storage, table, "geoid", idfield, geoid)
+    if first + n - 1 > _LARGEST_ID:
+        what = "vertex" if table == "vrtx" else "cell"
+        raise InvalidInputError(
+            f"feature {geoid}: the edit adds {n} {what} row(s) to tgsis.{table}, which take ids above every id the "
+            f"object has had there ({first - 1}), and {idfield} is a bigint that ends at {_LARGEST_ID}: "
+            "nothing was written",
+            hint="store the edited mesh as a new feature (its ids start again from 0) and delete this one",
+        )
+    return np.arange(first, first + n, dtype=np.int64)
+
+
 @dataclass(frozen=True)
 class _Written:
     """Database ids of the edited mesh's vertices and cells after a save, and the row counts."""
@@ -337,12 +365,12 @@ def _write_diff(
     kept_v = plan.vertex_map >= 0
     vertex_ids[kept_v] = stored.vertex_ids[plan.vertex_map[kept_v]]
     if len(added_v):
-        vertex_ids[added_v] = _next_id(conn, storage, "vrtx", "geoid", "vrtxid", geoid) + np.arange(len(added_v))
+        vertex_ids[added_v] = _fresh_ids(conn, storage, "vrtx", "vrtxid", geoid, len(added_v))
     cell_ids = np.empty(edited.n_cells, dtype=np.int64)
     kept_c = plan.cell_map >= 0
     cell_ids[kept_c] = stored.cell_ids[plan.cell_map[kept_c]]
     if len(added_c):
-        cell_ids[added_c] = _next_id(conn, storage, table, "geoid", idfield, geoid) + np.arange(len(added_c))
+        cell_ids[added_c] = _fresh_ids(conn, storage, table, idfield, geoid, len(added_c))
 
     # property rows: those of removed elements go, those of new elements come, changed values are replaced
     # (per alignment: a class may have vertex and cell properties side by side)
@@ -1388,11 +1416,11 @@ def _checkin_merge(
     vertex_ids = np.empty(mesh.n_vertices, dtype=np.int64)
     kept_v = plan.vertex_map >= 0
     vertex_ids[kept_v] = base.vertex_ids[plan.vertex_map[kept_v]]
-    vertex_ids[~kept_v] = _next_id(conn, storage, "vrtx", "geoid", "vrtxid", geoid) + np.arange(int((~kept_v).sum()))
+    vertex_ids[~kept_v] = _fresh_ids(conn, storage, "vrtx", "vrtxid", geoid, int((~kept_v).sum()))
     cell_ids = np.empty(mesh.n_cells, dtype=np.int64)
     kept_c = plan.cell_map >= 0
     cell_ids[kept_c] = base.cell_ids[plan.cell_map[kept_c]]
-    cell_ids[~kept_c] = _next_id(conn, storage, table, "geoid", idfield, geoid) + np.arange(int((~kept_c).sum()))
+    cell_ids[~kept_c] = _fresh_ids(conn, storage, table, idfield, geoid, int((~kept_c).sum()))
     # a vertex the comparison matched (within the tolerance) and did not pair as moved is unchanged, as a plain
     # check-in keeps it: the base's coordinates, not the file's rounding of them (else every such vertex is an edit)
     vertices = mesh.vertices.copy()

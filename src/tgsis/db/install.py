@@ -682,11 +682,12 @@ def partition_model_storage(conn: psycopg.Connection[Any], model: int, partition
     """Hash-partition the storage tables of a data model by geoid (``tgsis.partition_model_storage``).
 
     For a database that will outgrow plain tables (docs/scaling.md): run it
-    once after :func:`install`, before storing data of that model and before
-    :func:`tgsis.enable_feature_versioning`. The tables keep their
-    definitions, index names, comments, owner and the group roles' rights.
-    A table stored in chunks has its chunk table partitioned with its data,
-    versioned or not (verified; its face stays the same view).
+    once, best after :func:`install` before storing data of that model (the
+    rows are then moved once). The tables keep their definitions, index
+    names, comments, owner and the group roles' rights. Their storage is
+    partitioned with its data, versioned or not, verified bit for bit: the
+    table, or ``<table>_ver`` (its versioned view stays the same view), or a
+    table stored in chunks its chunk table (its face stays the same view).
 
     Parameters
     ----------
@@ -698,7 +699,7 @@ def partition_model_storage(conn: psycopg.Connection[Any], model: int, partition
         2 to 1024, and no more than the server's lock table holds
         (``max_locks_per_transaction`` x (``max_connections`` +
         ``max_prepared_transactions``) locks, about 4 per partition of each
-        table; docs/scaling.md): on a default server 221 for model 1.
+        table; docs/scaling.md): on a default server 218 for model 1 (row storage).
 
     Returns
     -------
@@ -712,8 +713,8 @@ def partition_model_storage(conn: psycopg.Connection[Any], model: int, partition
     NotFoundError
         No such data model.
     InUseError
-        A row table holds rows or is versioned, a table is partitioned already, or other objects use it
-        (nothing is changed).
+        A table is partitioned already, or other objects use its storage (views, foreign keys, a user's
+        trigger: named; nothing is changed).
     MissingPrivilegeError
         The role may not run it or does not own the tables.
     """

@@ -624,28 +624,74 @@ class MergedObject:
 
 
 class MergeResult(int):
-    """The rows a merge or refresh wrote (an ``int``, as before), with the objects it merged by region.
+    """What a merge or refresh wrote, counted per unit, with the objects it merged by region.
 
-    The number counts the rows the SQL merge or refresh wrote plus the rows
-    written into the version by the merges by region.
+    Three named counts, each in one unit:
+
+    - ``rows_by_region``: rows (vertex, cell, property, atom, part and
+      geometry rows, as the face ``tgsis.vrtx``, ... shows them) the merges by
+      region wrote into the version, on both storages (the sum of the
+      objects' ``rows_written``);
+    - ``rows_copied``: rows the SQL ``tgsis.merge_version`` (into the parent)
+      or ``tgsis.refresh_version`` (into the version) closed, deleted or
+      copied in tables stored as rows (every table of row storage; the
+      geometry, property, atom and part rows where model 1 is stored in
+      chunks);
+    - ``chunk_versions_copied``: chunk versions it closed, deleted or copied
+      in tables stored in chunks (``tgsis.stored_in_chunks``; 0 on row
+      storage): each a block of up to the chunk size of vertex or cell rows,
+      written whole (docs/storage.md, "What differs from rows").
+
+    The value as an ``int`` (and ``str``) is the sum of the three, as before
+    these counts existed. **Deprecated**: where model 1 is stored in chunks it
+    adds rows to chunk versions; read the named counts instead.
 
     Attributes
     ----------
     objects : tuple of MergedObject
+    rows_by_region, rows_copied, chunk_versions_copied : int
     """
 
     objects: tuple[MergedObject, ...]
+    rows_by_region: int
+    rows_copied: int
+    chunk_versions_copied: int
 
-    def __new__(cls, rows: int, objects: tuple[MergedObject, ...] = ()) -> MergeResult:
-        result = super().__new__(cls, rows)
+    def __new__(
+        cls, rows_copied: int, objects: tuple[MergedObject, ...] = (), *, chunk_versions_copied: int = 0
+    ) -> MergeResult:
+        by_region = sum(o.rows_written for o in objects)
+        result = super().__new__(cls, by_region + rows_copied + chunk_versions_copied)
         result.objects = objects
+        result.rows_by_region = by_region
+        result.rows_copied = rows_copied
+        result.chunk_versions_copied = chunk_versions_copied
         return result
 
     def __repr__(self) -> str:
-        return f"MergeResult({int(self)}, objects={self.objects!r})"
+        return (
+            f"MergeResult(rows_copied={self.rows_copied}, chunk_versions_copied={self.chunk_versions_copied}, "
+            f"rows_by_region={self.rows_by_region}, objects={self.objects!r})"
+        )
 
     def __str__(self) -> str:
-        return str(int(self))  # the number, as before (f-strings, the command line)
+        return str(int(self))  # the sum, as before (deprecated: the named counts say the units)
+
+
+def _sql_merge(conn: Conn, call: str, args: tuple[Any, ...], objects: tuple[MergedObject, ...]) -> MergeResult:
+    """Run the SQL merge or refresh (in the caller's transaction) and split what it wrote by unit.
+
+    ``tgsis.copy_object_state`` adds the chunk versions among the rows it
+    returns to the transaction's setting ``tgsis.chunk_versions_written``,
+    set to 0 here first.
+    """
+    conn.execute("SELECT set_config('tgsis.chunk_versions_written', '0', true)")
+    row = conn.execute(call, args).fetchone()
+    assert row is not None
+    chunks = conn.execute("SELECT current_setting('tgsis.chunk_versions_written')").fetchone()
+    assert chunks is not None
+    chunk_versions = int(chunks[0])
+    return MergeResult(int(row[0]) - chunk_versions, objects, chunk_versions_copied=chunk_versions)
 
 
 #: a region solved by one side's (or the base's) rows
@@ -967,8 +1013,11 @@ def merge_version(conn: Conn, version: str, *, remove: bool = False) -> MergeRes
     Returns
     -------
     MergeResult
-        An ``int``: the rows written (the merges by region into the version
-        and the merge into the parent); ``objects``: the objects merged by region.
+        What was written, per unit: ``rows_by_region`` (rows the merges by
+        region wrote into the version), ``rows_copied`` and
+        ``chunk_versions_copied`` (what the merge wrote into the parent, in
+        tables stored as rows and in chunks); ``objects``: the objects merged
+        by region. Its ``int`` value, the sum of the three, is deprecated.
 
     Raises
     ------
@@ -986,11 +1035,10 @@ def merge_version(conn: Conn, version: str, *, remove: bool = False) -> MergeRes
     try:
         with reraise(), conn.transaction():
             objects = _merge_by_region(conn, version, "merge", remove, reasons)
-            row = conn.execute("SELECT tgsis.merge_version(%s, %s)", (version, remove)).fetchone()
+            result = _sql_merge(conn, "SELECT tgsis.merge_version(%s, %s)", (version, remove), objects)
     except UnsolvedConflictsError as exc:
         raise _refusal(exc, reasons) from exc
-    assert row is not None
-    return MergeResult(int(row[0]) + sum(o.rows_written for o in objects), objects)
+    return result
 
 
 @checked
@@ -1005,7 +1053,9 @@ def refresh_version(conn: Conn, version: str) -> MergeResult:
     Returns
     -------
     MergeResult
-        An ``int``: the rows written; ``objects``: the objects merged by region.
+        As :func:`merge_version`'s: ``rows_by_region``, ``rows_copied`` and
+        ``chunk_versions_copied`` (what the refresh wrote into the version
+        from the parent), ``objects``.
 
     Raises
     ------
@@ -1019,8 +1069,7 @@ def refresh_version(conn: Conn, version: str) -> MergeResult:
     try:
         with reraise(), conn.transaction():
             objects = _merge_by_region(conn, version, "refresh", False, reasons)
-            row = conn.execute("SELECT tgsis.refresh_version(%s)", (version,)).fetchone()
+            result = _sql_merge(conn, "SELECT tgsis.refresh_version(%s)", (version,), objects)
     except UnsolvedConflictsError as exc:
         raise _refusal(exc, reasons) from exc
-    assert row is not None
-    return MergeResult(int(row[0]) + sum(o.rows_written for o in objects), objects)
+    return result

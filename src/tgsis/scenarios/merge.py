@@ -155,6 +155,13 @@ def _edit(context: Context, geoid: int, geologist: str, version: str, what: str,
     )
 
 
+def _copied(result: tgsis.MergeResult) -> str:
+    """What the SQL merge wrote into the parent, each unit apart (chunk versions only where model 1 is in chunks)."""
+    if result.chunk_versions_copied:
+        return f"{result.chunk_versions_copied} chunk versions and {result.rows_copied} rows"
+    return f"{result.rows_copied} rows"
+
+
 def _ids_text(ids: IntArray, shown: int = 8) -> str:
     """Ids as ascending runs, ``"3-17, 40, 52-60"``; after ``shown`` runs, ``"..."`` and the count."""
     ids = np.asarray(ids, dtype=np.int64)
@@ -369,11 +376,11 @@ def run(context: Context) -> None:
     base_ids, base_xyz = _vertices(conn, geoid, "DEFAULT", base_revision)
     base_triangles = _triangles(conn, geoid, "DEFAULT", base_revision)
 
-    # what merge_version counts in the parent: rows, or chunk versions where model 1 is stored in chunks (each
-    # chunk a changed vertex or triangle is in, written whole: docs/storage.md, "What differs from rows"); the
-    # rows a merge by region writes into the version are rows on both storages
+    # what merge_version writes into the parent, each unit apart (MergeResult): rows, and where model 1 is stored
+    # in chunks the chunk versions of the vertex and triangle tables (each chunk a changed vertex or triangle is in,
+    # written whole: docs/storage.md, "What differs from rows"); the rows a merge by region writes into the version
+    # are rows on both storages
     chunked = conn.execute("SELECT tgsis.stored_in_chunks('vrtx')").fetchone() == (True,)
-    unit = "chunk versions" if chunked else "rows"
     held = (
         "the chunks holding them, each written whole, and the fault's box"
         if chunked
@@ -381,8 +388,8 @@ def run(context: Context) -> None:
     )
 
     # 3. ann merges first: DEFAULT had not changed the fault
-    rows = tgsis.merge_version(conn, "north_tip")
-    out(f"3. north_tip merged into DEFAULT (which had not changed the fault): {rows} {unit} written")
+    north_tip = tgsis.merge_version(conn, "north_tip")
+    out(f"3. north_tip merged into DEFAULT (which had not changed the fault): {_copied(north_tip)} written")
 
     # 4. bob's edit against ann's, now in DEFAULT: two disjoint regions of one mesh, merged by themselves
     out("4. south_tip: DEFAULT and south_tip both changed the fault since release_5.3")
@@ -392,11 +399,12 @@ def run(context: Context) -> None:
         out(
             f"   merged by region ({merged_object.how}, {merged_object.regions} regions): "
             f"{merged_object.rows_written} rows written into south_tip (the merged fault, by id: ann's moves), then "
-            f"{int(result) - merged_object.rows_written} {unit} into DEFAULT (only what it did not hold: bob's "
+            f"{_copied(result)} into DEFAULT (only what it did not hold: bob's "
             f"moves, {held}), for {len(ann.moved) + len(bob.moved)} vertices moved (the whole fault written "
             f"again: {2 * fault.mesh.n_vertices + fault.mesh.n_cells} rows)"
         )
-    context.figure("south_tip_rows", int(result))
+    context.figure("south_tip_rows", result.rows_by_region + result.rows_copied)
+    context.figure("south_tip_chunk_versions", result.chunk_versions_copied)
     both = save_revision(conn, "both_tips")
     conn.commit()
     ids, merged = _vertices(conn, geoid, "DEFAULT")
@@ -473,11 +481,10 @@ def run(context: Context) -> None:
         ).format(sql.Literal("north_review")),
     )
     result = tgsis.merge_version(conn, "north_review")
-    by_region = sum(m.rows_written for m in result.objects)
     out(
-        f"   north_review merged: {by_region} rows written into north_review by region"
+        f"   north_review merged: {result.rows_by_region} rows written into north_review by region"
         + "".join(f" ({m.how})" for m in result.objects)
-        + f", then {int(result) - by_region} {unit} into DEFAULT"
+        + f", then {_copied(result)} into DEFAULT"
     )
     _, final = _vertices(conn, geoid, "DEFAULT")
     _, both_xyz = _vertices(conn, geoid, "DEFAULT", both)

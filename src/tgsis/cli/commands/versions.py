@@ -634,6 +634,14 @@ def _say_discarded(lost: dict[tuple[str, str], tuple[str, list[V.Discard]]] | No
         out(f"  {objectclass} {objectkey} ({solution}): discarded {V.describe_discards(discards)}")
 
 
+def _copied(result: MergeResult) -> str:
+    """What the SQL merge or refresh wrote, each unit apart: chunk versions (model 1 in chunks) only when some."""
+    rows = f"{result.rows_copied} row(s)"
+    if result.chunk_versions_copied:
+        return f"{result.chunk_versions_copied} chunk version(s) and {rows}"
+    return rows
+
+
 def _say_merged_by_region(result: MergeResult) -> None:
     for o in result.objects:
         how = "every region merged by itself" if o.how == "automatic" else f"{o.solved} region(s) by their solutions"
@@ -654,7 +662,7 @@ def cmd_version_merge(args: argparse.Namespace) -> int:
         lost = _recorded_discards(conn, args.name)
         written = merge_version(conn, args.name, remove=args.remove)
     out(
-        f"merged {V.show_name(args.name)} into its parent: {written} row(s) written"
+        f"merged {V.show_name(args.name)} into its parent: {_copied(written)} written"
         + ("; version removed" if args.remove else "")
     )
     _say_merged_by_region(written)
@@ -668,7 +676,7 @@ def cmd_version_refresh(args: argparse.Namespace) -> int:
     with connection(args) as conn, conn.transaction():
         lost = _recorded_discards(conn, args.name)
         written = refresh_version(conn, args.name)
-    out(f"refreshed {V.show_name(args.name)} from its parent: {written} row(s) written")
+    out(f"refreshed {V.show_name(args.name)} from its parent: {_copied(written)} written")
     _say_merged_by_region(written)
     _say_discarded(lost)
     return 0
