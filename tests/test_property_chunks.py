@@ -15,13 +15,15 @@ import math
 import struct
 from typing import Any
 
+import numpy as np
 import psycopg
-import pytest
 from psycopg import sql
 
 import tgsis
-from tests.merge_data import every_view, sqlstate, varied_history
+from tests.merge_data import SIDE, curved_surface, every_view, sqlstate, varied_history
 from tests.roles import login_roles
+from tgsis.db import features as F
+from tgsis.mesh import Surface
 
 Conn = psycopg.Connection[Any]
 
@@ -246,7 +248,10 @@ def test_the_chunk_table_keeps_the_class_tables_grants(db_dsn: str, conn: Conn) 
         "WHERE table_schema = 'public' AND table_name = %s AND grantee LIKE 'tgsis%%' ORDER BY 1, 2"
     )
     expected = conn.execute(grants, ("rock_cellpros",)).fetchall()
-    assert expected and conn.execute(grants, ("rock_cellpros_chunk",)).fetchall() == expected
+    # the class table's readers read the chunks (the decoded view is security_invoker); nobody but the owner writes them
+    assert expected and conn.execute(grants, ("rock_cellpros_chunk",)).fetchall() == [
+        g for g in expected if g[1] == "SELECT"
+    ]
     with login_roles(db_dsn, {"reader": "tgsis_reader", "editor": "tgsis_editor"}) as roles:
         reader = roles.connect("reader")
         assert reader.execute("SELECT count(*) FROM public.rock_cellpros_chunk_rows").fetchone() == reader.execute(
@@ -254,11 +259,173 @@ def test_the_chunk_table_keeps_the_class_tables_grants(db_dsn: str, conn: Conn) 
         ).fetchone()
         for statement in ("SELECT tgsis.rows_to_chunks('public.rock_cellpros')", "SELECT tgsis.chunk_registry('vrtx')"):
             assert sqlstate(reader, statement)[0] == "42501"
-        # an editor's direct insert of a malformed chunk is refused (the insert check), a hole holding a value
+        # an editor writes through the face only: the chunk table grants roles SELECT alone
         editor = roles.connect("editor")
         state, _ = sqlstate(
             editor,
             "INSERT INTO public.rock_cellpros_chunk (_geoid, chunk, revision, holes, p_i2, p_i4, p_i8, p_f4, p_f8, p_b) "
             "VALUES (9, 0, 0, '{1}', '{1,2}', '{1,2}', '{1,2}', '{1,2}', '{1,2}', '{t,f}')",
         )
-        assert state == "23514"
+        assert state == "42501"
+
+
+# --------------------------------------------------------------------------- the opt-in switch: the face over the chunks
+
+
+def _surface_class(conn: Conn, name: str = "layer") -> tuple[int, Any]:
+    """A class with a double and an integer vertex property, and one curved surface stored in it."""
+    tgsis.create_feature_class(
+        conn, name, "SURFACE", cell_properties=[("porosity", "double precision"), ("facies", "integer")]
+    )
+    surface = curved_surface()
+    vertex_properties = {
+        "porosity": surface.vertex_properties["porosity"].copy(),
+        "facies": (np.arange(surface.n_vertices, dtype=np.int32) % 7) - 3,
+    }
+    vertex_properties["porosity"][:4] = [_double(p) for p in PATTERNS]
+    mesh = Surface(surface.vertices, surface.cells, vertex_properties=vertex_properties)
+    geoid = F.insert_feature(conn, name, mesh)
+    conn.commit()
+    return geoid, mesh
+
+
+def _layer_rows(conn: Conn, name: str = "layer") -> list[tuple[Any, ...]]:
+    query = sql.SQL("SELECT _geoid, _idx, float8send(porosity), facies FROM public.{} ORDER BY 1, 2").format(
+        sql.Identifier(f"{name}_cellpros")
+    )
+    return [tuple(r) for r in conn.execute(query).fetchall()]
+
+
+def _same_properties(a: Any, b: Any) -> bool:
+    return bool(
+        np.array_equal(a.vertices.view(np.int64), b.vertices.view(np.int64))
+        and np.array_equal(a.cells, b.cells)
+        and np.array_equal(a.vertex_properties["porosity"].view(np.int64), b.vertex_properties["porosity"].view(np.int64))
+        and np.array_equal(a.vertex_properties["facies"], b.vertex_properties["facies"])
+    )
+
+
+def test_store_class_in_chunks_reads_writes_and_back(conn: Conn) -> None:
+    geoid, mesh = _surface_class(conn)
+    before_rows = _layer_rows(conn)
+    before = F.fetch_feature(conn, "layer", geoid).mesh
+    assert _same_properties(before, mesh)
+    written = conn.execute("SELECT tgsis.store_class_in_chunks('layer')").fetchone()
+    conn.commit()
+    assert written == (-(-mesh.n_vertices // 1024),)
+    assert conn.execute("SELECT relkind FROM pg_class WHERE oid = 'public.layer_cellpros'::regclass").fetchone() == ("v",)
+    assert conn.execute("SELECT count(*) FROM public.layer_cellpros_chunk").fetchone() == written
+    # the face reads what the rows held, and fetch_feature gives the same mesh, bits included
+    assert _layer_rows(conn) == before_rows
+    assert _same_properties(F.fetch_feature(conn, "layer", geoid).mesh, mesh)
+    # one value changed through the face by psql: that value only
+    conn.execute("UPDATE public.layer_cellpros SET porosity = '-0'::double precision, facies = 99 WHERE _geoid = %s AND _idx = 7", (geoid,))
+    conn.commit()
+    after = _layer_rows(conn)
+    changed = [(a, b) for a, b in zip(before_rows, after, strict=True) if a != b]
+    assert changed == [(before_rows[7], (geoid, 7, struct.pack(">d", -0.0), 99))]
+    # a bulk UPDATE, an INSERT and a DELETE through the face
+    conn.execute("UPDATE public.layer_cellpros SET facies = facies + 1 WHERE _geoid = %s AND _idx < 5", (geoid,))
+    conn.execute("DELETE FROM public.layer_cellpros WHERE _geoid = %s AND _idx = 100", (geoid,))
+    conn.execute("INSERT INTO public.layer_cellpros VALUES (%s, 5000, 1.5, 2)", (geoid,))
+    assert sqlstate(conn, "INSERT INTO public.layer_cellpros VALUES (%s, 7, 1.0, 1)", (geoid,))[0] == "23505"
+    assert sqlstate(conn, "INSERT INTO public.layer_cellpros VALUES (%s, 6000, NULL, 1)", (geoid,))[0] == "TG100"
+    conn.commit()
+    now = {r[1]: r for r in _layer_rows(conn)}
+    assert 100 not in now and now[5000] == (geoid, 5000, struct.pack(">d", 1.5), 2)
+    assert [now[i][3] for i in range(5)] == [before_rows[i][3] + 1 for i in range(5)]
+    holes = conn.execute(
+        "SELECT holes FROM public.layer_cellpros_chunk WHERE _geoid = %s AND chunk = 0", (geoid,)
+    ).fetchone()
+    assert holes == ([101],)
+    # the Python paths through the face: a new feature, fetched back, and deleted
+    other = F.insert_feature(conn, "layer", mesh)
+    conn.commit()
+    assert _same_properties(F.fetch_feature(conn, "layer", other).mesh, mesh)
+    assert F.delete_feature(conn, "layer", other)
+    conn.commit()
+    assert conn.execute("SELECT count(*) FROM public.layer_cellpros WHERE _geoid = %s", (other,)).fetchone() == (0,)
+    # back to rows: the same rows, bit for bit, and a table again
+    face = _layer_rows(conn)
+    assert conn.execute("SELECT tgsis.store_class_in_rows('layer')").fetchone() == (len(face),)
+    conn.commit()
+    assert conn.execute("SELECT relkind FROM pg_class WHERE oid = 'public.layer_cellpros'::regclass").fetchone() == ("r",)
+    assert _layer_rows(conn) == face
+    for gone in ("layer_cellpros_chunk", "layer_cellpros_chunk_rows", "layer_cellpros_shape"):
+        assert conn.execute("SELECT to_regclass(%s)", (f"public.{gone}",)).fetchone() == (None,)
+    assert conn.execute(
+        "SELECT obj_description('public.layer_cellpros'::regclass, 'pg_class') LIKE 'tgsis feature class layer: vertex%'"
+    ).fetchone() == (True,)
+
+
+def test_roles_keep_the_class_tables_rights_through_the_face(db_dsn: str, conn: Conn) -> None:
+    geoid, _ = _surface_class(conn)
+    conn.execute("SELECT tgsis.store_class_in_chunks('layer')")
+    conn.commit()
+    with login_roles(db_dsn, {"reader": "tgsis_reader", "editor": "tgsis_editor", "admin": "tgsis_admin"}) as roles:
+        reader = roles.connect("reader")
+        assert reader.execute("SELECT count(*) FROM public.layer_cellpros").fetchone() == (SIDE * SIDE,)
+        update = "UPDATE public.layer_cellpros SET facies = 5 WHERE _geoid = %s AND _idx = 3"
+        assert sqlstate(reader, update, (geoid,))[0] == "42501"
+        assert sqlstate(reader, "SELECT tgsis.store_class_in_rows('layer')")[0] == "42501"
+        editor = roles.connect("editor")
+        assert sqlstate(editor, update, (geoid,)) == (None, "")
+        editor.commit()
+        assert sqlstate(editor, "SELECT tgsis.store_class_in_rows('layer')")[0] == "42501"
+        # the chunk table itself: the editor's direct UPDATE of a chunk is not granted
+        assert sqlstate(editor, "UPDATE public.layer_cellpros_chunk SET facies[1] = 0")[0] == "42501"
+        admin = roles.connect("admin")
+        assert sqlstate(admin, "SELECT tgsis.store_class_in_rows('layer')") == (None, "")
+        admin.commit()
+    assert conn.execute(
+        "SELECT facies FROM public.layer_cellpros WHERE _geoid = %s AND _idx = 3", (geoid,)
+    ).fetchone() == (5,)
+
+
+def test_what_is_not_built_is_refused_by_name_and_changes_nothing(conn: Conn) -> None:
+    geoid, _ = _surface_class(conn)
+    assert sqlstate(conn, "SELECT tgsis.store_class_in_rows('layer')")[0] == "TG200"
+    conn.execute("SELECT tgsis.store_class_in_chunks('layer')")
+    conn.commit()
+    assert sqlstate(conn, "SELECT tgsis.store_class_in_chunks('layer')")[0] == "TG201"
+    before = _layer_rows(conn)
+    for statement in (
+        """SELECT tgsis.add_property('layer', 'cell', '{"name": "p2", "type": "real"}', '0')""",
+        "SELECT tgsis.rename_property('layer', 'facies', 'kind')",
+        "SELECT tgsis.drop_property('layer', 'facies')",
+    ):
+        state, message = sqlstate(conn, statement)
+        assert state == "TG100" and "stored in chunks" in message, (statement, message)
+    # a feature property is no column of the property table: it is added as before
+    assert sqlstate(conn, """SELECT tgsis.add_property('layer', 'feature', '{"name": "note", "type": "text"}')""") == (None, "")
+    state, message = sqlstate(conn, "SELECT tgsis.enable_feature_versioning()")
+    assert state == "TG300" and "stored in chunks" in message
+    assert conn.execute("SELECT count(*) FROM tgsis.versioned_tables").fetchone() == (0,)
+    assert _layer_rows(conn) == before
+    assert sqlstate(conn, "SELECT tgsis.store_class_in_chunks('nothere')")[0] == "TG200"
+    tgsis.create_feature_class(conn, "series", "SURFACE", time_model="INSTANTS", cell_properties=[("t", "real")])
+    assert sqlstate(conn, "SELECT tgsis.store_class_in_chunks('series')")[0] == "TG100"
+    tgsis.create_feature_class(conn, "vec", "SURFACE", cell_properties=[("normal", "double precision", 3)])
+    state, message = sqlstate(conn, "SELECT tgsis.store_class_in_chunks('vec')")
+    assert state == "TG100" and "normal" in message
+    assert conn.execute("SELECT to_regclass('public.vec_cellpros_chunk')").fetchone() == (None,)
+    # dropping the class drops its chunks too
+    assert tgsis.drop_feature_class(conn, "layer", force=True) == 1
+    conn.commit()
+    for gone in ("layer_cellpros", "layer_cellpros_chunk", "layer_cellpros_chunk_rows", "layer_cellpros_shape"):
+        assert conn.execute("SELECT to_regclass(%s)", (f"public.{gone}",)).fetchone() == (None,), gone
+    assert geoid > 0
+
+
+def test_a_versioned_class_is_refused_by_name(conn: Conn) -> None:
+    tgsis.create_feature_class(conn, "plain", "SURFACE", cell_properties=[("p", "real")], versioned=False)
+    tgsis.enable_feature_versioning(conn)
+    tgsis.create_feature_class(conn, "kept", "SURFACE", cell_properties=[("p", "real")])
+    conn.commit()
+    state, message = sqlstate(conn, "SELECT tgsis.store_class_in_chunks('kept')")
+    assert state == "TG300" and "versioned" in message
+    # a class registered without versioning switches, and is written in DEFAULT as its rows were
+    assert conn.execute("SELECT tgsis.store_class_in_chunks('plain')").fetchone() == (0,)
+    conn.execute("INSERT INTO public.plain_cellpros VALUES (1, 0, 2.5)")
+    conn.commit()
+    assert conn.execute("SELECT _geoid, _idx, p FROM public.plain_cellpros").fetchall() == [(1, 0, 2.5)]

@@ -132,6 +132,15 @@ BEGIN
 
     -- the rights of the row table's storage (its grants; its row-level security, policies and their comments)
     PERFORM tgsis.copy_relation_rights(v_storage, v_chunk);
+    -- a class's property table is written through its face only (tgsis.chunk_face_write, as the owner): the roles the
+    -- class table lets write keep reading the chunks, and write none directly (an UPDATE of a chunk is checked by nothing)
+    IF v_reg.classname IS NOT NULL THEN
+        FOR v_c IN SELECT DISTINCT a.grantee FROM pg_class c, aclexplode(c.relacl) AS a
+                    WHERE c.oid = v_chunk AND a.grantee <> c.relowner AND a.privilege_type <> 'SELECT' LOOP
+            EXECUTE format('REVOKE INSERT, UPDATE, DELETE, TRUNCATE, REFERENCES, TRIGGER ON %s FROM %s', v_chunk,
+                           CASE WHEN v_c.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_c.grantee)) END);
+        END LOOP;
+    END IF;
     -- what the roles that keep INSERT (the client's COPY upload) write is checked (tgsis.chunk_insert_check)
     PERFORM tgsis.create_chunk_insert_trigger(p_table, v_chunk);
     RETURN v_chunk;
