@@ -22,6 +22,7 @@ from psycopg import sql
 import tgsis
 from tests.merge_data import SIDE, curved_surface, every_view, sqlstate, varied_history
 from tests.roles import login_roles
+from tests.sessions import Background, connect, wait_until_blocked
 from tgsis.db import features as F
 from tgsis.mesh import Surface
 
@@ -449,3 +450,25 @@ def test_a_versioned_class_is_refused_by_name(conn: Conn) -> None:
     conn.execute("INSERT INTO public.plain_cellpros VALUES (1, 0, 2.5)")
     conn.commit()
     assert conn.execute("SELECT _geoid, _idx, p FROM public.plain_cellpros").fetchall() == [(1, 0, 2.5)]
+
+
+def test_two_writers_of_one_chunk_keep_both_values(db_dsn: str, conn: Conn) -> None:
+    geoid, _ = _surface_class(conn)
+    conn.execute("SELECT tgsis.store_class_in_chunks('layer')")
+    conn.commit()
+    first = connect(db_dsn, "first")
+    first.execute("UPDATE public.layer_cellpros SET facies = 41 WHERE _geoid = %s AND _idx = 1", (geoid,))
+
+    def second_writer(session: Conn) -> None:
+        session.execute("UPDATE public.layer_cellpros SET facies = 42 WHERE _geoid = %s AND _idx = 2", (geoid,))
+
+    second = Background(db_dsn, "second", second_writer)
+    wait_until_blocked(conn, second.pid, first.info.backend_pid)  # the chunk's lock
+    conn.rollback()
+    first.commit()
+    first.close()
+    second.finish()
+    rows = conn.execute(
+        "SELECT _idx, facies FROM public.layer_cellpros WHERE _geoid = %s AND _idx IN (1, 2) ORDER BY 1", (geoid,)
+    ).fetchall()
+    assert rows == [(1, 41), (2, 42)]  # no lost update: the second merged into what the first committed
