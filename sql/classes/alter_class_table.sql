@@ -37,7 +37,8 @@ BEGIN
     -- a property table stored in chunks (tgsis.store_class_in_chunks): its columns are the chunk table's arrays and
     -- the face's; altering them is not built, refused by name rather than half done
     IF to_regclass(format('%I.%I', v_schema, p_table || '_shape')) IS NOT NULL
-       AND to_regclass(format('%I.%I', v_schema, p_table || '_chunk')) IS NOT NULL THEN
+       AND to_regclass(format('%I.%I', v_schema, p_table || '_chunk')) IS NOT NULL
+           AND (SELECT c.relkind FROM pg_class c WHERE c.oid = to_regclass(format('%I.%I', v_schema, p_table))) = 'v' THEN
         RAISE EXCEPTION 'the properties of feature class % are stored in chunks: their columns cannot change yet', p_class.classname
             USING ERRCODE = 'TG100',
                   DETAIL = format('%I.%I is a face over %I.%I; adding, renaming or dropping a property there is not built. '

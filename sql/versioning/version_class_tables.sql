@@ -19,7 +19,8 @@ BEGIN
                                WHERE schemaname = v_table.schemaname AND tablename = v_table.tablename);
         -- a property table stored in chunks (tgsis.store_class_in_chunks) has no rows to version: refused by name
         IF to_regclass(format('%I.%I', v_table.schemaname, v_table.tablename || '_shape')) IS NOT NULL
-           AND to_regclass(format('%I.%I', v_table.schemaname, v_table.tablename || '_chunk')) IS NOT NULL THEN
+           AND to_regclass(format('%I.%I', v_table.schemaname, v_table.tablename || '_chunk')) IS NOT NULL
+           AND (SELECT c.relkind FROM pg_class c WHERE c.oid = to_regclass(format('%I.%I', v_table.schemaname, v_table.tablename))) = 'v' THEN
             RAISE EXCEPTION 'feature class % cannot be versioned while its properties are stored in chunks', p_class
                 USING ERRCODE = 'TG300',
                       DETAIL = format('%I.%I is a face over %I.%I; versioning property chunks is not built. '
