@@ -13,10 +13,12 @@ from __future__ import annotations
 
 import math
 import struct
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import psycopg
+import pytest
 from psycopg import sql
 
 import tgsis
@@ -25,6 +27,7 @@ from tests.roles import login_roles
 from tests.sessions import Background, connect, wait_until_blocked
 from tgsis.db import features as F
 from tgsis.mesh import Surface
+from tgsis.testing import TestServer
 
 Conn = psycopg.Connection[Any]
 
@@ -274,8 +277,13 @@ def test_the_chunk_table_keeps_the_class_tables_grants(db_dsn: str, conn: Conn) 
 # --------------------------------------------------------------------------- the opt-in switch: the face over the chunks
 
 
-def _surface_class(conn: Conn, name: str = "layer") -> tuple[int, Any]:
-    """A class with a double and an integer vertex property, and one curved surface stored in it."""
+def _surface_class(conn: Conn, name: str = "layer", nan_payload: bool = True) -> tuple[int, Any]:
+    """A class with a double and an integer vertex property, and one curved surface stored in it.
+
+    The first porosity values are PATTERNS' bits (-0.0, a subnormal, a NaN with a payload, 1 + 1 ulp); without
+    ``nan_payload`` the NaN is the canonical one (pg_dump writes floats as text, which keeps no NaN payload:
+    on rows as on chunks).
+    """
     tgsis.create_feature_class(
         conn, name, "SURFACE", cell_properties=[("porosity", "double precision"), ("facies", "integer")]
     )
@@ -284,7 +292,9 @@ def _surface_class(conn: Conn, name: str = "layer") -> tuple[int, Any]:
         "porosity": surface.vertex_properties["porosity"].copy(),
         "facies": (np.arange(surface.n_vertices, dtype=np.int32) % 7) - 3,
     }
-    vertex_properties["porosity"][:4] = [_double(p) for p in PATTERNS]
+    vertex_properties["porosity"][:4] = [
+        _double(p if nan_payload or p != 0x7FF8000000000ABC else 0x7FF8000000000000) for p in PATTERNS
+    ]
     mesh = Surface(surface.vertices, surface.cells, vertex_properties=vertex_properties)
     geoid = F.insert_feature(conn, name, mesh)
     conn.commit()
@@ -472,3 +482,38 @@ def test_two_writers_of_one_chunk_keep_both_values(db_dsn: str, conn: Conn) -> N
         "SELECT _idx, facies FROM public.layer_cellpros WHERE _geoid = %s AND _idx IN (1, 2) ORDER BY 1", (geoid,)
     ).fetchall()
     assert rows == [(1, 41), (2, 42)]  # no lost update: the second merged into what the first committed
+
+
+#: the chunk versions with their arrays' send forms (doubles by their bits; Python's NaN equals no NaN)
+CHUNK_BITS = (
+    "SELECT _geoid, chunk, revision, lastrevs, holes, array_send(porosity), array_send(facies) "
+    "FROM public.layer_cellpros_chunk ORDER BY 1, 2, 3"
+)
+
+
+@pytest.mark.parametrize("fmt", ["custom", "plain"])
+def test_pg_dump_and_restore_keep_the_property_chunks(
+    pg: TestServer, db_dsn: str, conn: Conn, tmp_path: Path, fmt: str
+) -> None:
+    from tests.test_backup import _bindir_of, _restored
+
+    geoid, mesh = _surface_class(conn, nan_payload=False)
+    conn.execute("SELECT tgsis.store_class_in_chunks('layer')")
+    conn.commit()
+    before = _layer_rows(conn)
+    chunks = conn.execute(CHUNK_BITS).fetchall()
+    conn.rollback()
+    with _restored(pg, _bindir_of(pg), db_dsn, fmt, tmp_path) as dsn, psycopg.connect(dsn) as copy:
+        assert _layer_rows(copy) == before
+        assert copy.execute(CHUNK_BITS).fetchall() == chunks
+        assert _same_properties(F.fetch_feature(copy, "layer", geoid).mesh, mesh)
+        # the restored face is written as before, and goes back to rows
+        copy.execute("UPDATE public.layer_cellpros SET facies = 77 WHERE _geoid = %s AND _idx = 9", (geoid,))
+        copy.commit()
+        assert copy.execute(
+            "SELECT facies FROM public.layer_cellpros WHERE _geoid = %s AND _idx = 9", (geoid,)
+        ).fetchone() == (77,)
+        copy.close()
+        with psycopg.connect(dsn) as again:
+            assert again.execute("SELECT tgsis.store_class_in_rows('layer')").fetchone() == (len(before),)
+            again.commit()
