@@ -27,7 +27,8 @@ AS $$
                     (SELECT m.chunksize FROM tgsis.model_tables m WHERE m.tablename = 'vrtx')),
            c.classname
       FROM tgsis.catalog c
-     WHERE format('%I.%I', c.schemaname, c.cellprotable) = p_table AND c.timemodel = 'STATIC'
+     WHERE strpos(p_table, '.') > 0  -- (a model table's bare name reads no row of the catalog)
+       AND format('%I.%I', c.schemaname, c.cellprotable) = p_table AND c.timemodel = 'STATIC'
 $$;
 
 REVOKE ALL ON FUNCTION tgsis.chunk_registry(text) FROM PUBLIC;

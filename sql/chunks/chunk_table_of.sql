@@ -2,7 +2,7 @@
 -- Every function of this layer starts from a table name: it must be
 -- registered for chunks (tgsis.chunk_columns: TG200, TG100), its chunk table
 -- <schema>.<table>_chunk (tgsis.chunk_relation) must exist, and for the conversions its decoded view
--- tgsis.<table>_chunk_rows too. One function says so, with one message and
+-- <schema>.<table>_chunk_rows too. One function says so, with one message and
 -- one hint, rather than a copy of the check in each caller.
 CREATE FUNCTION tgsis.chunk_table_of(p_table text, p_with_view boolean DEFAULT false)
 RETURNS regclass
@@ -27,4 +27,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.chunk_table_of(text, boolean) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.chunk_table_of(text, boolean) IS
-    '<schema>.<table>_chunk of a table of tgsis.chunk_registry (tgsis.chunk_relation); TG200 when the table is not registered or its chunk table (with p_with_view: or its decoded view tgsis.<table>_chunk_rows) does not exist, TG100 when its columns have no chunk form';
+    '<schema>.<table>_chunk of a table of tgsis.chunk_registry (tgsis.chunk_relation); TG200 when the table is not registered or its chunk table (with p_with_view: or its decoded view <schema>.<table>_chunk_rows) does not exist, TG100 when its columns have no chunk form';
