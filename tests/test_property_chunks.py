@@ -440,6 +440,9 @@ def test_what_is_not_built_is_refused_by_name_and_changes_nothing(conn: Conn) ->
     state, message = sqlstate(conn, "SELECT tgsis.store_class_in_chunks('vec')")
     assert state == "TG100" and "normal" in message
     assert conn.execute("SELECT to_regclass('public.vec_cellpros_chunk')").fetchone() == (None,)
+    tgsis.create_feature_class(conn, "bare", "SURFACE")  # no vertex or cell property: nothing to chunk
+    state, message = sqlstate(conn, "SELECT tgsis.store_class_in_chunks('bare')")
+    assert state == "TG100" and "no property column" in message
     # dropping the class drops its chunks too
     assert tgsis.drop_feature_class(conn, "layer", force=True) == 1
     conn.commit()

@@ -83,6 +83,14 @@ BEGIN
        AND NOT (NOT v_class AND a.attname = ANY (v_reg.chunkrefs) AND a.atttypid = 'bigint'::regtype)
        AND NOT (NOT v_class AND a.atttypid = 'double precision'::regtype AND NOT a.attname = ANY (v_reg.chunkrefs))
        AND NOT (v_class AND a.atttypid = ANY (v_types));
+    IF v_class AND v_bad IS NULL
+       AND NOT EXISTS (SELECT FROM pg_attribute a
+                        WHERE a.attrelid = v_storage AND a.attnum > 0 AND NOT a.attisdropped AND a.atttypid = ANY (v_types)
+                          AND a.attname NOT IN ('revision', 'lastrevs', 'revclosed', v_reg.chunkcolumn)
+                          AND NOT EXISTS (SELECT FROM pg_constraint con WHERE con.conrelid = v_storage AND con.contype = 'p'
+                                                                          AND a.attnum = ANY (con.conkey))) THEN
+        v_bad := 'no property column (a chunk holds one array per property)';
+    END IF;
     IF v_bad IS NOT NULL
        OR NOT EXISTS (SELECT FROM pg_constraint con JOIN pg_attribute a ON a.attrelid = con.conrelid AND a.attnum = ANY (con.conkey)
                        WHERE con.conrelid = v_storage AND con.contype = 'p' AND a.attname = v_reg.chunkcolumn
