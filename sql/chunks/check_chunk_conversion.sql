@@ -22,7 +22,7 @@ VOLATILE
 SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
-    v_reg      tgsis.model_tables;
+    v_reg      record;
     v_storage  regclass;
     v_view     regclass;
     v_shift    integer;
@@ -37,30 +37,32 @@ DECLARE
     v_bad      record;
     v_enc      text[];  -- the encoding's conditions on a chunk version c (tgsis.chunk_encoding_checks)
 BEGIN
-    SELECT * INTO v_reg FROM tgsis.model_tables t WHERE t.tablename = p_table;
     PERFORM tgsis.chunk_table_of(p_table, true);  -- TG200 / TG100
-    v_view := format('tgsis.%I', p_table || '_chunk_rows')::regclass;
-    v_storage := tgsis.storage_table('tgsis', p_table)::regclass;
+    SELECT * INTO v_reg FROM tgsis.chunk_registry(p_table) r;
+    v_view := tgsis.chunk_relation(p_table, '_chunk_rows')::regclass;
+    v_storage := tgsis.storage_table(v_reg.schemaname, v_reg.tablename)::regclass;
     v_shift := round(log(2, v_reg.chunksize))::integer;
     v_keys := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'key' ORDER BY c.keyorder);
-    v_cols := (SELECT string_agg(CASE WHEN c.role = 'float' THEN format('float8send(r.%1$I) AS %1$I', c.name)
+    -- floating-point values by their bits (-0.0, NaN payloads), the rest as they are
+    v_cols := (SELECT string_agg(CASE WHEN c.role = 'float' OR c.typename = 'double precision' THEN format('float8send(r.%1$I) AS %1$I', c.name)
+                                      WHEN c.typename = 'real' THEN format('float4send(r.%1$I) AS %1$I', c.name)
                                       ELSE format('r.%I', c.name) END, ', ' ORDER BY c.colorder)
                  FROM tgsis.chunk_columns(p_table) c);
-    v_versioned := EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table);
+    v_versioned := EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = v_reg.schemaname AND t.tablename = v_reg.tablename);
     -- the encoding of every chunk version (the conditions a direct insert is checked for too)
     v_enc := tgsis.chunk_encoding_checks(p_table);
-    EXECUTE format('SELECT concat_ws(%1$L, %2$s) AS object, c.chunk, c.revision, count(*) OVER () AS n FROM tgsis.%3$I c '
+    EXECUTE format('SELECT concat_ws(%1$L, %2$s) AS object, c.chunk, c.revision, count(*) OVER () AS n FROM %3$s c '
                    'WHERE NOT coalesce(%4$s, false) ORDER BY 1, 2, 3 LIMIT 1',
                    ', ', (SELECT string_agg(format('%L || c.%I', k || ' ', k), ', ') FROM unnest(v_keys) AS k),
-                   p_table || '_chunk', array_to_string(v_enc, ' AND ')) INTO v_bad;
+                   tgsis.chunk_relation(p_table, '_chunk'), array_to_string(v_enc, ' AND ')) INTO v_bad;
     IF v_bad.chunk IS NOT NULL THEN
-        RAISE EXCEPTION 'a chunk of tgsis.% is not encoded as its readers read it: object %, chunk %, revision %',
-                        quote_ident(p_table), v_bad.object, v_bad.chunk, v_bad.revision
+        RAISE EXCEPTION 'a chunk of % is not encoded as its readers read it: object %, chunk %, revision %',
+                        tgsis.chunk_relation(p_table, ''), v_bad.object, v_bad.chunk, v_bad.revision
             USING ERRCODE = 'TG000',
-                  DETAIL = format('%s chunk version(s) of tgsis.%I with arrays not one-dimensional from 1, of unequal length, '
+                  DETAIL = format('%s chunk version(s) of %s with arrays not one-dimensional from 1, of unequal length, '
                                   'ending on a hole, NULL elsewhere than at their holes, refs both relative and absolute, or a vtop '
                                   'that does not bound the vertex ids.',
-                                  v_bad.n, p_table || '_chunk'),
+                                  v_bad.n, tgsis.chunk_relation(p_table, '_chunk')),
                   HINT = 'nothing was converted; report it with the table, object, chunk and set';
     END IF;
     IF v_versioned THEN
@@ -88,7 +90,7 @@ BEGIN
         (SELECT string_agg(format('%L || d.%I', k || ' ', k), ', ') FROM unnest(v_keys) AS k),
         v_reg.chunkcolumn, v_shift, v_rextra, v_cextra) INTO v_bad;
     IF v_bad.label IS NOT NULL THEN
-        RAISE EXCEPTION 'the chunks of tgsis.% differ from its rows: object %, chunk %, in %', quote_ident(p_table),
+        RAISE EXCEPTION 'the chunks of % differ from its rows: object %, chunk %, in %', tgsis.chunk_relation(p_table, ''),
                         v_bad.object, v_bad.chunk, v_bad.label
             USING ERRCODE = 'TG000',
                   DETAIL = format('%s row(s) differ over all sets (a row missing or extra on one side, or a value not the same bits); '

@@ -9,7 +9,9 @@
 -- the pieces, so that a fix of the decoding reaches every reader (a copy of
 -- this loop in the face kept the overflow the hostile review fixed in the
 -- view). p_alias is the chunk table's alias in the caller's FROM; the
--- ordinality and the unnested columns are read as u.<name> and u.o.
+-- ordinality and the unnested columns are read as u.<name> and u.o. A
+-- class's property table (columns of role 'value', tgsis.chunk_columns) may
+-- hold NULL values: there a slot is present when holes does not list it.
 CREATE FUNCTION tgsis.chunk_decode_sql(p_table text, p_alias text)
 RETURNS TABLE (select_list text, arrays text, aliases text, present text)
 LANGUAGE plpgsql
@@ -26,18 +28,19 @@ DECLARE
     v_a      text := quote_ident(p_alias);
     v_c      record;
 BEGIN
-    v_shift := (SELECT round(log(2, t.chunksize))::integer FROM tgsis.model_tables t WHERE t.tablename = p_table);
+    v_shift := (SELECT round(log(2, r.chunksize))::integer FROM tgsis.chunk_registry(p_table) r);
     v_refs := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder);
     FOR v_c IN SELECT c.name, c.role FROM tgsis.chunk_columns(p_table) c ORDER BY c.colorder LOOP
         IF v_c.role = 'key' THEN
             v_select := v_select || format('%s.%I', v_a, v_c.name);
         ELSIF v_c.role = 'chunk' THEN
             v_select := v_select || format('(%s.chunk << %s) + (u.o - 1) AS %I', v_a, v_shift, v_c.name);
-        ELSIF v_c.role = 'float' THEN
+        ELSIF v_c.role IN ('float', 'value') THEN
             v_arrays := v_arrays || format('%s.%I', v_a, v_c.name);
             v_alias := v_alias || quote_ident(v_c.name);
             v_select := v_select || format('u.%I', v_c.name);
-            v_first := coalesce(v_first, format('u.%I IS NOT NULL', v_c.name));
+            v_first := coalesce(v_first, CASE WHEN v_c.role = 'float' THEN format('u.%I IS NOT NULL', v_c.name)
+                                              ELSE format('NOT coalesce(u.o = ANY (%s.holes), false)', v_a) END);
         ELSE
             v_arrays := v_arrays || format('%s.%I', v_a, v_c.name) || format('%s.%I', v_a, v_c.name || '_wide');
             v_alias := v_alias || quote_ident(v_c.name) || quote_ident(v_c.name || '_wide');

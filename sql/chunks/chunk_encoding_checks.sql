@@ -16,7 +16,9 @@
 -- readers of the cells on given vertices would skip a chunk that holds some).
 -- Returned as SQL boolean expressions over the alias c, built
 -- from the registry (tgsis.chunk_columns); the caller ANDs them (NULL counts
--- as false). Internal: runs with the caller's rights.
+-- as false). A class's property arrays (role 'value') may hold NULL at
+-- present slots: only NULL at every hole is required of them. Internal: runs
+-- with the caller's rights.
 CREATE FUNCTION tgsis.chunk_encoding_checks(p_table text)
 RETURNS text[]
 LANGUAGE plpgsql
@@ -27,10 +29,10 @@ DECLARE
     v_size integer;
     v_len  text;  -- the chunk version's length: its first value array's
 BEGIN
-    v_size := (SELECT t.chunksize FROM tgsis.model_tables t WHERE t.tablename = p_table);
-    v_len := (SELECT CASE WHEN c.role = 'float' THEN format('cardinality(c.%I)', c.name)
+    v_size := (SELECT r.chunksize FROM tgsis.chunk_registry(p_table) r);
+    v_len := (SELECT CASE WHEN c.role IN ('float', 'value') THEN format('cardinality(c.%I)', c.name)
                           ELSE format('cardinality(coalesce(c.%I, c.%I))', c.name, c.name || '_wide') END
-                FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref') ORDER BY c.colorder LIMIT 1);
+                FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref', 'value') ORDER BY c.colorder LIMIT 1);
     RETURN ARRAY[format('%s BETWEEN 1 AND %s', v_len, v_size),
                  format('(c.holes IS NULL OR (cardinality(c.holes) > 0 AND NOT (%s = ANY (c.holes))))', v_len)]
         -- (array_positions finds the NULLs in C: the check runs on every upload; the CASE keeps it from
@@ -45,6 +47,11 @@ BEGIN
                   ORDER BY a.w, a.colorder)
         || ARRAY(SELECT format('c.%I IS NOT NULL', c.name) FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'float'
                   ORDER BY c.colorder)
+        -- a property's array: present, of the chunk's shape, NULL at every hole (a present slot may be NULL too)
+        || ARRAY(SELECT format('(c.%1$I IS NOT NULL AND CASE WHEN array_ndims(c.%1$I) = 1 AND array_lower(c.%1$I, 1) = 1 '
+                               'AND cardinality(c.%1$I) = %2$s THEN coalesce(c.holes::integer[], ''{}'') '
+                               '<@ coalesce(array_positions(c.%1$I, NULL), ''{}'') ELSE false END)', c.name, v_len)
+                   FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'value' ORDER BY c.colorder)
         || ARRAY(SELECT format('(c.vbase IS NOT NULL) = (c.%1$I IS NOT NULL) AND (c.vbase IS NULL) = (c.%2$I IS NOT NULL)',
                                c.name, c.name || '_wide')
                    FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder)

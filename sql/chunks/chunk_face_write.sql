@@ -56,7 +56,10 @@ SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
     v_table     text := TG_ARGV[0];
-    v_reg       tgsis.model_tables;
+    v_reg       record;
+    v_objclass  text;      -- the object class the object locks name: the model table's, 'feature' for a class's table
+    v_sch       text;      -- the table's schema and name, for the messages and the notes
+    v_tname     text;
     v_face      text := format('%I.%I', TG_TABLE_SCHEMA, TG_TABLE_NAME);
     v_chunk     text;
     v_now       text := format('pg_temp.%I', 'tgsis_face_now_' || TG_RELID);
@@ -91,8 +94,12 @@ DECLARE
     v_split     boolean;   -- the flush's second group (features of classes without versioning) waits in v_now
     v_moved     bigint;
 BEGIN
-    SELECT * INTO v_reg FROM tgsis.model_tables t WHERE t.tablename = v_table;
-    v_chunk := format('tgsis.%I', v_table || '_chunk');
+    SELECT * INTO v_reg FROM tgsis.chunk_registry(v_table) r;
+    v_objclass := coalesce((SELECT t.objectclass FROM tgsis.model_tables t WHERE t.tablename = v_reg.tablename AND v_reg.classname IS NULL),
+                           'feature');
+    v_sch := v_reg.schemaname;
+    v_tname := v_reg.tablename;
+    v_chunk := tgsis.chunk_relation(v_table, '_chunk');
     v_kc := v_reg.keycolumn;
     v_cc := v_reg.chunkcolumn;
     v_mask := v_reg.chunksize - 1;
@@ -127,16 +134,18 @@ BEGIN
     v_first := (SELECT c.name FROM tgsis.chunk_columns(v_table) c WHERE c.role = 'ref' ORDER BY c.colorder LIMIT 1);
     SELECT format('ROW(%s)::%s', string_agg(
                CASE WHEN c.role IN ('key', 'chunk') THEN format('(%%1$s).%I', c.name)
-                    WHEN c.role = 'float' THEN format('c.%I[%s]', c.name, v_slot)
+                    WHEN c.role IN ('float', 'value') THEN format('c.%I[%s]', c.name, v_slot)
                     ELSE format('CASE WHEN c.vbase IS NOT NULL THEN c.vbase + %s ELSE c.%I[%s] END',
                                 CASE WHEN c.name = v_first THEN format('c.%I[%s]', c.name, v_slot)
                                      ELSE format('c.%I[%s] + c.%I[%s]', v_first, v_slot, c.name, v_slot) END,
                                 c.name || '_wide', v_slot) END, ', ' ORDER BY c.colorder), v_face)
       INTO v_decoded
       FROM tgsis.chunk_columns(v_table) c;
-    v_present := (SELECT CASE WHEN f.role = 'float' THEN format('c.%I[%s] IS NOT NULL', f.name, v_slot)
+    v_present := (SELECT CASE WHEN f.role = 'value' THEN format('(%s <= cardinality(c.%I) AND NOT coalesce(%s = ANY (c.holes), false))',
+                                                                v_slot, f.name, v_slot)
+                              WHEN f.role = 'float' THEN format('c.%I[%s] IS NOT NULL', f.name, v_slot)
                               ELSE format('(c.%I[%s] IS NOT NULL OR c.%I[%s] IS NOT NULL)', f.name, v_slot, f.name || '_wide', v_slot) END
-                    FROM tgsis.chunk_columns(v_table) f WHERE f.role IN ('float', 'ref') ORDER BY f.colorder LIMIT 1);
+                    FROM tgsis.chunk_columns(v_table) f WHERE f.role IN ('float', 'ref', 'value') ORDER BY f.colorder LIMIT 1);
     v_keytext := format('concat_ws(%L, %s)', ', ',
                         (SELECT string_agg(format('(%%1$s).%I::text', k), ', ' ORDER BY o) FROM unnest(v_keycols) WITH ORDINALITY AS u(k, o)));
     -- the state of the row's slot in the visible version of its chunk, read with this statement's snapshot
@@ -162,8 +171,8 @@ BEGIN
         -- features of classes without versioning are written in revision 0, the others in the working revision:
         -- when the statement changed both, those of no version wait in v_now (empty between rows) for a second pass
         v_split := false;
-        IF v_reg.objectclass = 'feature'
-           AND EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = v_table) THEN
+        IF v_objclass = 'feature'
+           AND EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = v_sch AND t.tablename = v_tname) THEN
             EXECUTE format('WITH moved AS (DELETE FROM %1$s q WHERE q.%3$I IN (SELECT u.geoid FROM tgsis.unversioned_features u) '
                            '  AND EXISTS (SELECT FROM %1$s o WHERE o.%3$I NOT IN (SELECT u.geoid FROM tgsis.unversioned_features u)) '
                            'RETURNING q.*) INSERT INTO %2$s SELECT * FROM moved', v_queue, v_now, v_kc);
@@ -194,34 +203,37 @@ BEGIN
     v_geoids := v_keys::bigint[];
 
     -- rights, revision, object locks, notes (per row; for the queued rows, by the flush for all at once)
-    PERFORM tgsis.check_class_write(v_geoids, CASE WHEN TG_OP = 'DELETE' THEN 'UPDATE, DELETE' ELSE 'UPDATE' END);
-    IF EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = v_table) THEN
+    -- (a class's own table: the face's grants, the class table's, were checked by PostgreSQL for the statement)
+    IF v_reg.classname IS NULL THEN
+        PERFORM tgsis.check_class_write(v_geoids, CASE WHEN TG_OP = 'DELETE' THEN 'UPDATE, DELETE' ELSE 'UPDATE' END);
+    END IF;
+    IF EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = v_sch AND t.tablename = v_tname) THEN
         SELECT w.versionid, w.revision, w.revisions INTO v_vid, v_w, v_set FROM tgsis.write_revision() AS w;  -- TG002, TG301
-        IF v_reg.objectclass = 'feature' AND EXISTS (SELECT FROM tgsis.unversioned_features u WHERE u.geoid = ANY (v_geoids)) THEN
+        IF v_objclass = 'feature' AND EXISTS (SELECT FROM tgsis.unversioned_features u WHERE u.geoid = ANY (v_geoids)) THEN
             v_w := tgsis.unversioned_revision(v_geoids);  -- TG305, TG300
             v_set := ARRAY[0];
         END IF;
     ELSE
-        PERFORM tgsis.plain_write_check('tgsis', v_table);  -- TG305
+        PERFORM tgsis.plain_write_check(v_sch, v_tname);  -- TG305
         v_vid := tgsis.version_id(tgsis.get_working_version());
         v_w := 0;
         v_set := ARRAY[0];
     END IF;
-    IF EXISTS (SELECT FROM tgsis.object_locks l WHERE l.objectclass = v_reg.objectclass AND l.objectkey = ANY (v_keys)) THEN
-        PERFORM tgsis.check_objects_unlocked(v_reg.objectclass, v_keys);
+    IF EXISTS (SELECT FROM tgsis.object_locks l WHERE l.objectclass = v_objclass AND l.objectkey = ANY (v_keys)) THEN
+        PERFORM tgsis.check_objects_unlocked(v_objclass, v_keys);
     END IF;
     IF cardinality(v_keys) > tgsis.object_lock_limit() THEN
         -- more objects than the shared lock table holds locks for: the class's lock in the version, exclusively
-        PERFORM pg_advisory_xact_lock(tgsis.object_class_lock_key(v_reg.objectclass, v_vid));
+        PERFORM pg_advisory_xact_lock(tgsis.object_class_lock_key(v_objclass, v_vid));
     ELSE
-        PERFORM pg_advisory_xact_lock_shared(tgsis.object_lock_key(v_reg.objectclass, k, v_vid))
+        PERFORM pg_advisory_xact_lock_shared(tgsis.object_lock_key(v_objclass, k, v_vid))
            FROM (SELECT DISTINCT k FROM unnest(v_keys) AS k ORDER BY k) AS s;
     END IF;
     IF v_w <> 0 AND EXISTS (SELECT FROM unnest(v_keys) AS k
                              WHERE NOT EXISTS (SELECT FROM tgsis.revision_objects o
-                                                WHERE o.revision = v_w AND o.schemaname = 'tgsis' AND o.tablename = v_table
+                                                WHERE o.revision = v_w AND o.schemaname = v_sch AND o.tablename = v_tname
                                                   AND o.objectkey = k)) THEN
-        PERFORM tgsis.record_changed_objects('tgsis', v_table, v_keys);
+        PERFORM tgsis.record_changed_objects(v_sch, v_tname, v_keys);
     END IF;
 
     IF TG_LEVEL = 'STATEMENT' THEN
@@ -246,27 +258,27 @@ BEGIN
                               format(v_present, 'q'), format(v_decoded, 'q'), v_chunk, format(v_match, 'q'), v_vis))
            INTO v_gone, v_changed, v_mine USING v_set;
         IF v_gone IS NOT NULL THEN
-            RAISE EXCEPTION 'could not serialize access due to concurrent delete of row (%)=(%) of tgsis.% in version %',
-                    array_to_string(v_keycols, ', '), v_gone, v_table, quote_literal(tgsis.get_working_version())
+            RAISE EXCEPTION 'could not serialize access due to concurrent delete of row (%)=(%) of %.% in version %',
+                    array_to_string(v_keycols, ', '), v_gone, v_sch, v_tname, quote_literal(tgsis.get_working_version())
                 USING ERRCODE = 'serialization_failure',
                       DETAIL = 'A transaction that committed after this statement read the row deleted it.',
-                      HINT = 'Retry the transaction.', TABLE = v_table, SCHEMA = 'tgsis';
+                      HINT = 'Retry the transaction.', TABLE = v_tname, SCHEMA = v_sch;
         END IF;
         IF v_mine THEN
-            RAISE EXCEPTION 'a row (%)=(%) of tgsis.% to be updated was already changed by an operation the current statement triggered',
-                    array_to_string(v_keycols, ', '), v_changed, v_table
+            RAISE EXCEPTION 'a row (%)=(%) of %.% to be updated was already changed by an operation the current statement triggered',
+                    array_to_string(v_keycols, ', '), v_changed, v_sch, v_tname
                 USING ERRCODE = 'triggered_data_change_violation',
                       DETAIL = 'A function or trigger the statement ran changed the row after the statement read it.',
                       HINT = 'Change each row of a versioned view once: not both in a statement and in a function or trigger it runs.',
-                      TABLE = v_table, SCHEMA = 'tgsis';
+                      TABLE = v_tname, SCHEMA = v_sch;
         END IF;
         IF v_changed IS NOT NULL THEN
-            RAISE EXCEPTION 'could not serialize access due to concurrent update of row (%)=(%) of tgsis.% in version %',
-                    array_to_string(v_keycols, ', '), v_changed, v_table, quote_literal(tgsis.get_working_version())
+            RAISE EXCEPTION 'could not serialize access due to concurrent update of row (%)=(%) of %.% in version %',
+                    array_to_string(v_keycols, ', '), v_changed, v_sch, v_tname, quote_literal(tgsis.get_working_version())
                 USING ERRCODE = 'serialization_failure',
                       DETAIL = 'A transaction that committed after this statement read the row changed it; '
                                'writing values computed from the old row would undo that change.',
-                      HINT = 'Retry the transaction.', TABLE = v_table, SCHEMA = 'tgsis';
+                      HINT = 'Retry the transaction.', TABLE = v_tname, SCHEMA = v_sch;
         END IF;
         PERFORM tgsis.write_chunk_rows(v_table, v_queue::regclass);
         EXECUTE format('DELETE FROM %s', v_queue);
@@ -301,19 +313,19 @@ BEGIN
         END IF;
         EXECUTE 'SELECT ' || format(v_keytext, '$1') INTO v_changed USING OLD;
         IF v_state = 'mine' THEN
-            RAISE EXCEPTION 'a row (%)=(%) of tgsis.% to be updated was already changed by an operation the current statement triggered',
-                    array_to_string(v_keycols, ', '), v_changed, v_table
+            RAISE EXCEPTION 'a row (%)=(%) of %.% to be updated was already changed by an operation the current statement triggered',
+                    array_to_string(v_keycols, ', '), v_changed, v_sch, v_tname
                 USING ERRCODE = 'triggered_data_change_violation',
                       DETAIL = 'A function or trigger the statement ran changed the row after the statement read it.',
                       HINT = 'Change each row of a versioned view once: not both in a statement and in a function or trigger it runs.',
-                      TABLE = v_table, SCHEMA = 'tgsis';
+                      TABLE = v_tname, SCHEMA = v_sch;
         ELSIF v_state = 'changed' THEN
-            RAISE EXCEPTION 'could not serialize access due to concurrent update of row (%)=(%) of tgsis.% in version %',
-                    array_to_string(v_keycols, ', '), v_changed, v_table, quote_literal(tgsis.get_working_version())
+            RAISE EXCEPTION 'could not serialize access due to concurrent update of row (%)=(%) of %.% in version %',
+                    array_to_string(v_keycols, ', '), v_changed, v_sch, v_tname, quote_literal(tgsis.get_working_version())
                 USING ERRCODE = 'serialization_failure',
                       DETAIL = 'A transaction that committed after this statement read the row changed it; '
                                'writing values computed from the old row would undo that change.',
-                      HINT = 'Retry the transaction.', TABLE = v_table, SCHEMA = 'tgsis';
+                      HINT = 'Retry the transaction.', TABLE = v_tname, SCHEMA = v_sch;
         END IF;
     END IF;
     -- the new key: a duplicate when it is there
@@ -330,13 +342,13 @@ BEGIN
                                           'so the statement is refused and nothing is written.', array_to_string(v_keycols, ', '),
                                           v_changed, quote_literal(tgsis.get_working_version())),
                           HINT = 'insert only the keys that are not there yet, and change the others with an update',
-                          TABLE = v_table, SCHEMA = 'tgsis';
+                          TABLE = v_tname, SCHEMA = v_sch;
             END IF;
-            RAISE EXCEPTION 'duplicate key value violates unique constraint "%"', v_table || '_pkey'
+            RAISE EXCEPTION 'duplicate key value violates unique constraint "%"', v_tname || '_pkey'
                 USING ERRCODE = 'unique_violation',
                       DETAIL = format('Key (%s)=(%s) already exists in version %s.', array_to_string(v_keycols, ', '), v_changed,
                                       quote_literal(tgsis.get_working_version())),
-                      CONSTRAINT = v_table || '_pkey', TABLE = v_table, SCHEMA = 'tgsis';
+                      CONSTRAINT = v_tname || '_pkey', TABLE = v_tname, SCHEMA = v_sch;
         END IF;
     END IF;
     IF TG_OP <> 'INSERT' THEN

@@ -46,9 +46,10 @@ BEGIN
                                   'coordinate array, with refs both relative and absolute, or with a vtop that does not bound the '
                                   'vertex ids (docs/storage.md, '
                                   '"Chunks and the mapping of ids").', v_bad.n),
-                  HINT = format('write the rows through the view tgsis.%I, which encodes them', v_table);
+                  HINT = format('write the rows through the view %s, which encodes them', tgsis.chunk_relation(v_table, ''));
     END IF;
-    IF NOT EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = v_table) THEN
+    IF NOT EXISTS (SELECT FROM tgsis.versioned_tables t, tgsis.chunk_registry(v_table) r
+                    WHERE t.schemaname = r.schemaname AND t.tablename = r.tablename) THEN
         EXECUTE format('SELECT concat_ws(%1$L, %2$s) AS object, c.chunk, c.revision, count(*) OVER () AS n '
                        'FROM tgsis_new_chunks c WHERE c.revision IS DISTINCT FROM 0 OR c.lastrevs IS DISTINCT FROM ''{}'' '
                        'ORDER BY 1, 2, 3 LIMIT 1',
@@ -59,7 +60,7 @@ BEGIN
                 USING ERRCODE = 'check_violation',
                       DETAIL = format('%s chunk version(s) inserted with another revision or closed; unversioned storage '
                                       'holds one open version of revision 0 per chunk.', v_bad.n),
-                      HINT = format('write the rows through the view tgsis.%I, which encodes them', v_table);
+                      HINT = format('write the rows through the view %s, which encodes them', tgsis.chunk_relation(v_table, ''));
         END IF;
     END IF;
     RETURN NULL;

@@ -28,9 +28,10 @@ DECLARE
     v_n         bigint;
 BEGIN
     v_chunk := tgsis.chunk_table_of(p_table, true);  -- TG200 / TG100
-    v_view := format('tgsis.%I', p_table || '_chunk_rows')::regclass;
-    v_storage := tgsis.storage_table('tgsis', p_table)::regclass;
-    v_versioned := EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table);
+    v_view := tgsis.chunk_relation(p_table, '_chunk_rows')::regclass;
+    v_storage := (SELECT tgsis.storage_table(r.schemaname, r.tablename) FROM tgsis.chunk_registry(p_table) r)::regclass;
+    v_versioned := EXISTS (SELECT FROM tgsis.versioned_tables t, tgsis.chunk_registry(p_table) r
+                            WHERE t.schemaname = r.schemaname AND t.tablename = r.tablename);
     IF v_versioned THEN
         PERFORM FROM tgsis.versions v ORDER BY v.versionid FOR SHARE;
     END IF;

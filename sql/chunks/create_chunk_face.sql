@@ -27,8 +27,9 @@ VOLATILE
 SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
-    v_reg       tgsis.model_tables;
-    v_view      text := coalesce(p_view, p_table);
+    v_reg       record;
+    v_geoidcol  text;      -- a shared model table's geoid column: the class rights filter (a class's own table has its grants)
+    v_view      text;
     v_chunk     regclass;
     v_storage   regclass;
     v_today     regclass;
@@ -39,39 +40,43 @@ DECLARE
     v_acl       record;
     v_face      regclass;
 BEGIN
-    SELECT * INTO v_reg FROM tgsis.model_tables t WHERE t.tablename = p_table;
     v_chunk := tgsis.chunk_table_of(p_table);  -- TG200 / TG100
-    IF to_regclass(format('tgsis.%I', v_view)) IS NOT NULL THEN
-        RAISE EXCEPTION 'tgsis.% exists already', quote_ident(v_view)
+    SELECT * INTO v_reg FROM tgsis.chunk_registry(p_table) r;
+    v_geoidcol := (SELECT t.geoidcolumn FROM tgsis.model_tables t WHERE t.tablename = v_reg.tablename AND v_reg.classname IS NULL);
+    v_view := coalesce(p_view, v_reg.tablename);
+    IF to_regclass(format('%I.%I', v_reg.schemaname, v_view)) IS NOT NULL THEN
+        RAISE EXCEPTION '% exists already', format('%I.%I', v_reg.schemaname, v_view)
             USING ERRCODE = 'TG201', DETAIL = 'The face of a chunk table takes a name no relation has.';
     END IF;
     v_storage := tgsis.row_shape(p_table);  -- the row definition (comments), before or after the switch
-    v_today := to_regclass(format('tgsis.%I', p_table));
-    v_versioned := EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table);
+    v_today := to_regclass(format('%I.%I', v_reg.schemaname, v_reg.tablename));
+    v_versioned := EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = v_reg.schemaname AND t.tablename = v_reg.tablename);
     SELECT * INTO v_dec FROM tgsis.chunk_decode_sql(p_table, 'v') AS d;
     -- today's test (tgsis.versioned_view_source) while the storage is versioned, decided when the view is read:
     -- versioning can be enabled after the face is made (the hostile review found a face made on unversioned
     -- storage showing every chunk version, twice each vertex, once versioning was enabled)
     v_where := v_where || format('CASE WHEN (SELECT EXISTS (SELECT FROM tgsis.versioned_tables t '
-                                 'WHERE t.schemaname = ''tgsis'' AND t.tablename = %L)) '
+                                 'WHERE t.schemaname = %L AND t.tablename = %L)) '
                                  'THEN (v.revision = ANY ((SELECT tgsis.get_revisions(true))::integer[])) IS TRUE '
                                  'AND (NOT v.revclosed OR NOT (v.lastrevs && (SELECT tgsis.get_revisions(true)))) '
-                                 'ELSE true END', p_table);
+                                 'ELSE true END', v_reg.schemaname, v_reg.tablename);
     v_where := v_where || v_dec.present;
-    IF v_reg.geoidcolumn IS NOT NULL THEN
-        v_where := v_where || tgsis.class_rights_filter(v_reg.geoidcolumn, 'SELECT', 'v');
+    IF v_geoidcol IS NOT NULL THEN
+        v_where := v_where || tgsis.class_rights_filter(v_geoidcol, 'SELECT', 'v');
     END IF;
-    EXECUTE format('CREATE VIEW tgsis.%I WITH (security_barrier = true) AS SELECT %s FROM %s v '
+    EXECUTE format('CREATE VIEW %I.%I WITH (security_barrier = true) AS SELECT %s FROM %s v '
                    'CROSS JOIN LATERAL unnest(%s) WITH ORDINALITY AS u(%s, o) WHERE %s',
-                   v_view, v_dec.select_list, v_chunk, v_dec.arrays, v_dec.aliases, array_to_string(v_where, ' AND '));
-    v_face := format('tgsis.%I', v_view)::regclass;
+                   v_reg.schemaname, v_view, v_dec.select_list, v_chunk, v_dec.arrays, v_dec.aliases, array_to_string(v_where, ' AND '));
+    v_face := format('%I.%I', v_reg.schemaname, v_view)::regclass;
     EXECUTE format('COMMENT ON VIEW %s IS %L', v_face,
                    -- one text whether versioned or not: the WHERE above asks at each read, and a table versioned after
                    -- the switch has the face of one switched while versioned (tests/test_storage_default.py)
                    format('%s, stored in chunks (%s, docs/storage.md "The relational face"): the rows of the visible chunk versions '
                           '(those of the session''s version when versioned), '
-                          'written through INSTEAD OF triggers (tgsis.chunk_face_write); one vertex by key is read fastest by the keyed reads of model 1 (vertex, vertices)',
-                          coalesce(obj_description(v_storage, 'pg_class'), 'tgsis.' || p_table), v_chunk));
+                          'written through INSTEAD OF triggers (tgsis.chunk_face_write)%s',
+                          coalesce(obj_description(v_storage, 'pg_class'), tgsis.chunk_relation(p_table, '')), v_chunk,
+                          CASE WHEN v_reg.classname IS NULL THEN '; one vertex by key is read fastest by the keyed reads of model 1 (vertex, vertices)'
+                               ELSE '' END));
     FOR v_c IN SELECT a.attname, col_description(v_storage, s.attnum) AS note
                  FROM pg_attribute a JOIN pg_attribute s ON s.attrelid = v_storage AND s.attname = a.attname
                 WHERE a.attrelid = v_face AND a.attnum > 0 LOOP

@@ -1,4 +1,4 @@
--- tgsis.create_chunk_table(table): create tgsis.<table>_chunk, the chunk storage of a model table (issue 40).
+-- tgsis.create_chunk_table(table): create <schema>.<table>_chunk, the chunk storage of a model table or of a class's property table (issue 40).
 -- The layout is the contract of docs/storage.md ("Chunks and the mapping of
 -- ids", "Compression, bit-exact", "Versioning of chunks"): the row table's key
 -- with its local-id column replaced by chunk (= id >> log2(chunksize)), then
@@ -21,7 +21,10 @@
 -- Nothing reads or writes chunk tables yet besides tgsis.write_chunk_rows and
 -- the decoded face (tgsis.create_chunk_view); the storage switch comes next.
 -- Not idempotent: a second call refuses by name (TG201). Runs with the
--- caller's rights (tgsis's owner, who owns the storage).
+-- caller's rights (tgsis's owner, who owns the storage). A class's property
+-- table (tgsis.chunk_registry, 'schema.table') gets its chunk table in its
+-- own schema, with one array per property of the property's own type
+-- (docs/storage.md, "Property chunks: the contract").
 CREATE FUNCTION tgsis.create_chunk_table(p_table text)
 RETURNS regclass
 LANGUAGE plpgsql
@@ -29,8 +32,8 @@ VOLATILE
 SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
-    v_reg     tgsis.model_tables;
-    v_name    text := p_table || '_chunk';
+    v_reg     record;
+    v_name    text;
     v_storage regclass;
     v_chunk   regclass;
     v_float   text;
@@ -40,17 +43,18 @@ DECLARE
     v_c       record;
     v_key     text;
 BEGIN
-    SELECT * INTO v_reg FROM tgsis.model_tables t WHERE t.tablename = p_table;
     PERFORM FROM tgsis.chunk_columns(p_table);  -- TG200 when not registered for chunks, TG100 when it does not fit
+    SELECT * INTO v_reg FROM tgsis.chunk_registry(p_table) r;
+    v_name := v_reg.tablename || '_chunk';
     IF octet_length(v_name || '_rows') > 63 THEN
         RAISE EXCEPTION 'table name % is too long for a chunk table', quote_literal(p_table)
             USING ERRCODE = 'TG101', DETAIL = 'The chunk table <table>_chunk and its face <table>_chunk_rows must fit in 63 bytes.';
     END IF;
-    IF to_regclass(format('tgsis.%I', v_name)) IS NOT NULL THEN
-        RAISE EXCEPTION 'tgsis.% exists already', quote_ident(v_name)
-            USING ERRCODE = 'TG201', DETAIL = format('The chunk table of tgsis.%I was created before.', p_table);
+    IF to_regclass(format('%I.%I', v_reg.schemaname, v_name)) IS NOT NULL THEN
+        RAISE EXCEPTION '% exists already', format('%I.%I', v_reg.schemaname, v_name)
+            USING ERRCODE = 'TG201', DETAIL = format('The chunk table of %I.%I was created before.', v_reg.schemaname, v_reg.tablename);
     END IF;
-    v_storage := tgsis.storage_table('tgsis', p_table)::regclass;
+    v_storage := tgsis.storage_table(v_reg.schemaname, v_reg.tablename)::regclass;
     -- lz4 when the server was built with it (a build option: default_toast_compression then lists it)
     v_float := CASE WHEN EXISTS (SELECT FROM pg_settings WHERE name = 'default_toast_compression' AND 'lz4' = ANY (enumvals))
                     THEN 'lz4' ELSE 'pglz' END;
@@ -71,23 +75,27 @@ BEGIN
     IF cardinality(v_refs) > 0 THEN
         v_defs := v_defs || ARRAY['vbase bigint', 'vtop bigint'];
     END IF;
-    FOR v_c IN SELECT c.name, c.role FROM tgsis.chunk_columns(p_table) c WHERE c.keyorder IS NULL ORDER BY c.colorder LOOP
+    FOR v_c IN SELECT c.name, c.role, c.typename FROM tgsis.chunk_columns(p_table) c WHERE c.keyorder IS NULL ORDER BY c.colorder LOOP
         v_defs := v_defs || CASE WHEN v_c.role = 'float' THEN format('%I double precision[] COMPRESSION %s', v_c.name, v_float)
+                                 -- a property: an array of its own type (lz4 for doubles, as coordinates)
+                                 WHEN v_c.role = 'value' THEN format('%I %s[] COMPRESSION %s', v_c.name, v_c.typename,
+                                                                     CASE WHEN v_c.typename = 'double precision' THEN v_float
+                                                                          ELSE 'pglz' END)
                                  ELSE format('%I integer[] COMPRESSION pglz', v_c.name) END;
     END LOOP;
     v_defs := v_defs || ARRAY(SELECT format('%I bigint[] COMPRESSION pglz', r || '_wide') FROM unnest(v_refs) WITH ORDINALITY AS u(r, o)
                                ORDER BY o);
-    EXECUTE format('CREATE TABLE tgsis.%I (%s, PRIMARY KEY (%s, revision))', v_name, array_to_string(v_defs, ', '), v_key);
-    v_chunk := format('tgsis.%I', v_name)::regclass;
+    EXECUTE format('CREATE TABLE %I.%I (%s, PRIMARY KEY (%s, revision))', v_reg.schemaname, v_name, array_to_string(v_defs, ', '), v_key);
+    v_chunk := format('%I.%I', v_reg.schemaname, v_name)::regclass;
     -- the revision indexes of every versioned storage (tgsis.create_revision_indexes says why)
     EXECUTE format('CREATE INDEX %I ON %s USING brin (revision) WITH (autosummarize = on)', v_name || '_revision_idx', v_chunk);
     EXECUTE format('CREATE INDEX %I ON %s (%I) WHERE revclosed', v_name || '_closed_idx', v_chunk, v_reg.keycolumn);
 
     -- comments, generated from the row table's
     EXECUTE format('COMMENT ON TABLE %s IS %L', v_chunk,
-                   format('chunk storage of tgsis.%s (issue 40, docs/storage.md): one row per block of %s consecutive %s of one object '
-                          'and per chunk version; nothing reads it yet but tgsis.write_chunk_rows and tgsis.%s_rows',
-                          p_table, v_reg.chunksize, v_reg.chunkcolumn, v_name));
+                   format('chunk storage of %s.%s (issue 40, docs/storage.md): one row per block of %s consecutive %s of one object '
+                          'and per chunk version; nothing reads it yet but tgsis.write_chunk_rows and %s.%s_rows',
+                          v_reg.schemaname, v_reg.tablename, v_reg.chunksize, v_reg.chunkcolumn, v_reg.schemaname, v_name));
     FOR v_c IN SELECT c.name, c.role FROM tgsis.chunk_columns(p_table) c ORDER BY c.colorder LOOP
         v_coldesc := col_description(v_storage, (SELECT a.attnum FROM pg_attribute a WHERE a.attrelid = v_storage AND a.attname = v_c.name)::integer);
         IF v_c.role = 'chunk' THEN
@@ -95,7 +103,11 @@ BEGIN
                            format('chunk number: the ids %s = chunk * %s + slot - 1 (slots 1..%s; %s: %s)', v_c.name, v_reg.chunksize,
                                   v_reg.chunksize, v_c.name, coalesce(v_coldesc, 'local id')));
         ELSIF v_c.role = 'key' THEN
-            EXECUTE format('COMMENT ON COLUMN %s.%I IS %L', v_chunk, v_c.name, coalesce(v_coldesc, format('key column %s of tgsis.%s', v_c.name, p_table)));
+            EXECUTE format('COMMENT ON COLUMN %s.%I IS %L', v_chunk, v_c.name,
+                           coalesce(v_coldesc, format('key column %s of %s.%s', v_c.name, v_reg.schemaname, v_reg.tablename)));
+        ELSIF v_c.role = 'value' THEN
+            EXECUTE format('COMMENT ON COLUMN %s.%I IS %L', v_chunk, v_c.name,
+                           format('%s per slot (NULL: no value, or a hole when holes lists the slot)', coalesce(v_coldesc, v_c.name)));
         ELSIF v_c.role = 'float' THEN
             EXECUTE format('COMMENT ON COLUMN %s.%I IS %L', v_chunk, v_c.name,
                            format('%s per slot, bit-exact (NULL: a hole)', coalesce(v_coldesc, v_c.name)));
@@ -126,6 +138,15 @@ BEGIN
 
     -- the rights of the row table's storage (its grants; its row-level security, policies and their comments)
     PERFORM tgsis.copy_relation_rights(v_storage, v_chunk);
+    -- a class's property table is written through its face only (tgsis.chunk_face_write, as the owner): the roles the
+    -- class table lets write keep reading the chunks, and write none directly (an UPDATE of a chunk is checked by nothing)
+    IF v_reg.classname IS NOT NULL THEN
+        FOR v_c IN SELECT DISTINCT a.grantee FROM pg_class c, aclexplode(c.relacl) AS a
+                    WHERE c.oid = v_chunk AND a.grantee <> c.relowner AND a.privilege_type <> 'SELECT' LOOP
+            EXECUTE format('REVOKE INSERT, UPDATE, DELETE, TRUNCATE, REFERENCES, TRIGGER ON %s FROM %s', v_chunk,
+                           CASE WHEN v_c.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_c.grantee)) END);
+        END LOOP;
+    END IF;
     -- what the roles that keep INSERT (the client's COPY upload) write is checked (tgsis.chunk_insert_check)
     PERFORM tgsis.create_chunk_insert_trigger(p_table, v_chunk);
     RETURN v_chunk;

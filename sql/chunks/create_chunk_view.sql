@@ -16,29 +16,28 @@ VOLATILE
 SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
-    v_reg    tgsis.model_tables;
     v_chunk  regclass;
-    v_view   text := p_table || '_chunk_rows';
+    v_view   text := tgsis.chunk_relation(p_table, '_chunk_rows');
     v_dec    record;
     v_c      record;
     v_acl    record;
 BEGIN
-    SELECT * INTO v_reg FROM tgsis.model_tables t WHERE t.tablename = p_table;
     v_chunk := tgsis.chunk_table_of(p_table);  -- TG200 / TG100
-    IF to_regclass(format('tgsis.%I', v_view)) IS NOT NULL THEN
-        RAISE EXCEPTION 'tgsis.% exists already', quote_ident(v_view) USING ERRCODE = 'TG201';
+    IF to_regclass(v_view) IS NOT NULL THEN
+        RAISE EXCEPTION '% exists already', v_view USING ERRCODE = 'TG201';
     END IF;
     SELECT * INTO v_dec FROM tgsis.chunk_decode_sql(p_table, 'c') AS d;
-    EXECUTE format('CREATE VIEW tgsis.%I WITH (security_invoker = true) AS SELECT %s, c.revision, c.lastrevs, c.revclosed '
+    EXECUTE format('CREATE VIEW %s WITH (security_invoker = true) AS SELECT %s, c.revision, c.lastrevs, c.revclosed '
                    'FROM %s c CROSS JOIN LATERAL unnest(%s) WITH ORDINALITY AS u(%s, o) WHERE %s',
                    v_view, v_dec.select_list, v_chunk, v_dec.arrays, v_dec.aliases, v_dec.present);
-    EXECUTE format('COMMENT ON VIEW tgsis.%I IS %L', v_view,
-                   format('the chunks of %s decoded: one row per present slot and chunk version, with the columns of tgsis.%s '
-                          'and the chunk version''s revision, lastrevs, revclosed (no visibility filter)', v_chunk, p_table));
+    EXECUTE format('COMMENT ON VIEW %s IS %L', v_view,
+                   format('the chunks of %s decoded: one row per present slot and chunk version, with the columns of %s '
+                          'and the chunk version''s revision, lastrevs, revclosed (no visibility filter)', v_chunk,
+                          tgsis.chunk_relation(p_table, '')));
     FOR v_c IN SELECT a.attname, a.attnum FROM pg_attribute a
-                WHERE a.attrelid = format('tgsis.%I', v_view)::regclass AND a.attnum > 0 ORDER BY a.attnum LOOP
+                WHERE a.attrelid = v_view::regclass AND a.attnum > 0 ORDER BY a.attnum LOOP
         -- revision, lastrevs, revclosed: the chunk table's (a versioned row storage has its own, of row versions)
-        EXECUTE format('COMMENT ON COLUMN tgsis.%I.%I IS %L', v_view, v_c.attname,
+        EXECUTE format('COMMENT ON COLUMN %s.%I IS %L', v_view, v_c.attname,
                        coalesce(CASE WHEN v_c.attname IN ('revision', 'lastrevs', 'revclosed')
                                      THEN col_description(v_chunk, (SELECT a.attnum FROM pg_attribute a
                                                                      WHERE a.attrelid = v_chunk AND a.attname = v_c.attname)::integer)
@@ -51,10 +50,10 @@ BEGIN
     END LOOP;
     FOR v_acl IN SELECT DISTINCT a.grantee FROM pg_class c, aclexplode(c.relacl) AS a
                   WHERE c.oid = v_chunk AND a.grantee <> c.relowner AND a.privilege_type = 'SELECT' LOOP
-        EXECUTE format('GRANT SELECT ON tgsis.%I TO %s', v_view,
+        EXECUTE format('GRANT SELECT ON %s TO %s', v_view,
                        CASE WHEN v_acl.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_acl.grantee)) END);
     END LOOP;
-    RETURN format('tgsis.%I', v_view)::regclass;
+    RETURN v_view::regclass;
 END
 $$;
 

@@ -24,6 +24,9 @@
 -- (FOR SHARE: no new revision, merge or compress meanwhile). Refused: a chunk
 -- table that holds chunks already (TG201), no chunk table or view (TG200).
 -- Returns the number of chunk versions written. Internal: the caller's rights.
+-- The table is one of tgsis.chunk_registry: a model table, or a class's
+-- property table ('schema.table'), whose NULL values stay NULL in their slot
+-- (holes alone marks the absent ids).
 CREATE FUNCTION tgsis.rows_to_chunks(p_table text)
 RETURNS bigint
 LANGUAGE plpgsql
@@ -31,7 +34,7 @@ VOLATILE
 SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
-    v_reg       tgsis.model_tables;
+    v_reg       record;
     v_chunk     regclass;
     v_storage   regclass;
     v_shift     integer;
@@ -49,10 +52,10 @@ DECLARE
     v_n         bigint;
     v_any       boolean;
 BEGIN
-    SELECT * INTO v_reg FROM tgsis.model_tables t WHERE t.tablename = p_table;
     v_chunk := tgsis.chunk_table_of(p_table, true);  -- TG200 / TG100
-    v_storage := tgsis.storage_table('tgsis', p_table)::regclass;
-    v_versioned := EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table);
+    SELECT * INTO v_reg FROM tgsis.chunk_registry(p_table) r;
+    v_storage := tgsis.storage_table(v_reg.schemaname, v_reg.tablename)::regclass;
+    v_versioned := EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = v_reg.schemaname AND t.tablename = v_reg.tablename);
     IF v_versioned THEN
         PERFORM FROM tgsis.versions v ORDER BY v.versionid FOR SHARE;
     END IF;
@@ -70,9 +73,10 @@ BEGIN
     v_shift := round(log(2, v_reg.chunksize))::integer;
     v_cc := v_reg.chunkcolumn;
     v_keys := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'key' ORDER BY c.keyorder);
-    v_floats := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'float' ORDER BY c.colorder);
+    -- the arrays of values (coordinates, or a class's properties), built alike
+    v_floats := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'value') ORDER BY c.colorder);
     v_refs := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder);
-    v_vals := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref') ORDER BY c.colorder);
+    v_vals := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref', 'value') ORDER BY c.colorder);
     v_k := ARRAY(SELECT quote_ident(k) FROM unnest(v_keys) AS k) || 'chunk'::text;
     v_parts := jsonb_build_object(
         'storage', v_storage::text,

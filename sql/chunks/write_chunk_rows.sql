@@ -52,7 +52,10 @@ VOLATILE
 SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
-    v_reg      tgsis.model_tables;
+    v_reg      record;
+    v_objclass text;      -- a model table's object class (tgsis.model_tables.objectclass); NULL for a class's table
+    v_name     text;      -- the table as messages name it, schema-qualified
+    v_notnull  text[];    -- columns a NULL value may not be written into
     v_chunk    regclass;
     v_storage  regclass;
     v_size     bigint;
@@ -84,21 +87,30 @@ DECLARE
     v_round    integer := 0;
     v_sql      text;
 BEGIN
-    SELECT * INTO v_reg FROM tgsis.model_tables t WHERE t.tablename = p_table;
     v_chunk := tgsis.chunk_table_of(p_table);  -- TG200 / TG100
+    SELECT * INTO v_reg FROM tgsis.chunk_registry(p_table) r;
+    v_objclass := (SELECT t.objectclass FROM tgsis.model_tables t WHERE t.tablename = v_reg.tablename AND v_reg.classname IS NULL);
+    v_name := tgsis.chunk_relation(p_table, '');
     v_storage := tgsis.row_shape(p_table);  -- the row definition (CHECK constraints), before or after the switch
     v_size := v_reg.chunksize;
     v_shift := round(log(2, v_reg.chunksize))::integer;
     v_cc := v_reg.chunkcolumn;
     v_keys := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'key' ORDER BY c.keyorder);
-    v_floats := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'float' ORDER BY c.colorder);
+    -- the value arrays: coordinates (float), or a class's properties (value: NULL allowed, holes marks a hole)
+    v_floats := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'value') ORDER BY c.colorder);
     v_refs := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder);
-    v_vals := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref') ORDER BY c.colorder);
+    v_vals := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref', 'value') ORDER BY c.colorder);
+    -- a NULL value would be a hole in a model table; in a class's table only its NOT NULL columns refuse it
+    v_notnull := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c
+                        WHERE c.role IN ('float', 'ref')
+                           OR (c.role = 'value' AND EXISTS (SELECT FROM pg_attribute a WHERE a.attrelid = v_storage
+                                                                AND a.attname = c.name AND a.attnotnull))
+                        ORDER BY c.colorder);
 
     -- p_rows: a temporary table of this session, read by several statements (checks, locks, the write), so that
     -- what was checked is what is written (a table other sessions write, or a view over one, changes in between)
     IF NOT EXISTS (SELECT FROM pg_class c WHERE c.oid = p_rows AND c.relkind IN ('r', 'p') AND c.relpersistence = 't') THEN
-        RAISE EXCEPTION 'the rows to write into tgsis.% are not in a temporary table', quote_ident(p_table)
+        RAISE EXCEPTION 'the rows to write into % are not in a temporary table', v_name
             USING ERRCODE = 'TG100',
                   DETAIL = format('%s is read by several statements; only a temporary table of this session cannot '
                                   'change between them.', p_rows),
@@ -114,10 +126,10 @@ BEGIN
                                                    AND NOT a.attisdropped AND a.atttypid = s.atttypid);
     IF v_missing IS NOT NULL OR NOT EXISTS (SELECT FROM pg_attribute a WHERE a.attrelid = p_rows AND a.attname = '_delete'
                                                                          AND a.atttypid = 'boolean'::regtype AND NOT a.attisdropped) THEN
-        RAISE EXCEPTION 'the rows to write into tgsis.% lack columns', quote_ident(p_table)
+        RAISE EXCEPTION 'the rows to write into % lack columns', v_name
             USING ERRCODE = 'TG100',
-                  DETAIL = format('%s needs the columns of tgsis.%I, of its types, and _delete boolean; missing or of another type: %s.',
-                                  p_rows, p_table,
+                  DETAIL = format('%s needs the columns of %s, of its types, and _delete boolean; missing or of another type: %s.',
+                                  p_rows, v_name,
                                   concat_ws(', ', v_missing, CASE WHEN NOT EXISTS (
                                       SELECT FROM pg_attribute a WHERE a.attrelid = p_rows AND a.attname = '_delete'
                                                                    AND a.atttypid = 'boolean'::regtype AND NOT a.attisdropped)
@@ -136,7 +148,7 @@ BEGIN
         concat_ws(' OR ', 'r._delete IS NULL',
                   (SELECT string_agg(format('r.%I IS NULL', k), ' OR ') FROM unnest(v_keys || v_cc) AS k)),
         'a key or _delete is NULL',
-        coalesce((SELECT string_agg(format('r.%I IS NULL', v), ' OR ') FROM unnest(v_vals) AS v), 'false'),
+        coalesce((SELECT string_agg(format('r.%I IS NULL', v), ' OR ') FROM unnest(v_notnull) AS v), 'false'),
         'a row to write has a NULL value',
         v_cc, (SELECT string_agg(format(' OR (NOT r._delete AND r.%I < 0)', v), '') FROM unnest(v_refs) AS v),
         'a row has a negative id',
@@ -144,26 +156,26 @@ BEGIN
         'a key is given twice',
         p_rows) INTO v_problem;
     IF v_problem IS NOT NULL THEN
-        RAISE EXCEPTION 'cannot write these rows into tgsis.%: %', quote_ident(p_table), v_problem
+        RAISE EXCEPTION 'cannot write these rows into %: %', v_name, v_problem
             USING ERRCODE = 'TG100',
-                  DETAIL = format('Ids are 0 or more, the columns of tgsis.%I are all NOT NULL, and each key is written once by one call.',
-                                  p_table),
+                  DETAIL = format('Ids are 0 or more, the columns of %s are NOT NULL (%s), and each key is written once by one call.',
+                                  v_name, coalesce(array_to_string(v_notnull, ', '), 'none')),
                   HINT = 'give each key once, with all its values';
     END IF;
     FOR v_con IN SELECT con.conname, pg_get_expr(con.conbin, con.conrelid) AS expr
                    FROM pg_constraint con WHERE con.conrelid = v_storage AND con.contype = 'c'
-                    AND con.conname <> p_table || '_shape_holds_no_rows' ORDER BY con.conname LOOP
+                    AND con.conname <> v_reg.tablename || '_shape_holds_no_rows' ORDER BY con.conname LOOP
         EXECUTE format('SELECT EXISTS (SELECT FROM %s WHERE NOT _delete AND NOT (%s))', p_rows, v_con.expr) INTO v_more;
         IF v_more THEN
-            RAISE EXCEPTION 'new row for relation "%" violates check constraint "%"', p_table, v_con.conname
-                USING ERRCODE = 'check_violation', DETAIL = format('Written into tgsis.%I by chunks.', p_table || '_chunk');
+            RAISE EXCEPTION 'new row for relation "%" violates check constraint "%"', v_reg.tablename, v_con.conname
+                USING ERRCODE = 'check_violation', DETAIL = format('Written into %s by chunks.', v_chunk);
         END IF;
     END LOOP;
 
     -- the working revision and the set it sees
-    IF EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table) THEN
+    IF EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = v_reg.schemaname AND t.tablename = v_reg.tablename) THEN
         EXECUTE format('SELECT array_agg(DISTINCT r.%I) FROM %s r', v_reg.keycolumn, p_rows) INTO v_geoids;
-        IF v_reg.objectclass = 'feature'
+        IF v_objclass = 'feature'
            AND EXISTS (SELECT FROM tgsis.unversioned_features u WHERE u.geoid = ANY (v_geoids)) THEN
             v_w := tgsis.unversioned_revision(v_geoids);  -- TG305, TG300
             v_set := ARRAY[0];
@@ -171,7 +183,7 @@ BEGIN
             SELECT w.revision, w.revisions INTO v_w, v_set FROM tgsis.write_revision() AS w;
         END IF;
     ELSE
-        PERFORM tgsis.plain_write_check('tgsis', p_table);  -- TG305
+        PERFORM tgsis.plain_write_check(v_reg.schemaname, v_reg.tablename);  -- TG305
         v_w := 0;
         v_set := ARRAY[0];
     END IF;
@@ -207,7 +219,8 @@ BEGIN
                                   || ARRAY(SELECT format('v.%I, v.%I', r, r || '_wide') FROM unnest(v_refs) AS r), ', '),
         'alias', array_to_string(ARRAY(SELECT quote_ident(f) FROM unnest(v_floats) AS f)
                                  || ARRAY(SELECT format('%I, %I', r, r || '_wide') FROM unnest(v_refs) AS r), ', '),
-        'present', CASE WHEN cardinality(v_floats) > 0 THEN format('u.%I IS NOT NULL', v_floats[1])
+        'present', CASE WHEN v_reg.classname IS NOT NULL THEN 'NOT coalesce(u.o = ANY (v.holes), false)'
+                        WHEN cardinality(v_floats) > 0 THEN format('u.%I IS NOT NULL', v_floats[1])
                         ELSE format('(u.%I IS NOT NULL OR u.%I IS NOT NULL)', v_refs[1], v_refs[1] || '_wide') END,
         'decoded', array_to_string(
             ARRAY(SELECT format('u.%I', f) FROM unnest(v_floats) AS f)
@@ -215,7 +228,8 @@ BEGIN
                                    CASE WHEN r = v_refs[1] THEN format('u.%I', r) ELSE format('u.%I + u.%I', v_refs[1], r) END,
                                    r || '_wide', r)
                      FROM unnest(v_refs) AS r), ', '),
-        'rvals', array_to_string(ARRAY(SELECT format('r.%I::double precision AS %I', f, f) FROM unnest(v_floats) AS f)
+        'rvals', array_to_string(ARRAY(SELECT format('r.%I::%s AS %I', c.name, c.typename, c.name)
+                                         FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'value') ORDER BY c.colorder)
                                  || ARRAY(SELECT format('r.%I::bigint AS %I', r, r) FROM unnest(v_refs) AS r), ', '),
         'o_vals', array_to_string(ARRAY(SELECT 'o.' || quote_ident(c) FROM unnest(v_vals) AS c), ', '),
         'n_vals', array_to_string(ARRAY(SELECT 'n.' || quote_ident(c) FROM unnest(v_vals) AS c), ', '),
@@ -350,7 +364,7 @@ $q$;
         EXIT WHEN cardinality(v_todo) = 0;
         -- new chunks a concurrent writer inserted first: again, reading what it committed
         IF v_round >= 5 THEN
-            RAISE EXCEPTION 'chunks of tgsis.% kept changing while this write waited for them', quote_ident(p_table)
+            RAISE EXCEPTION 'chunks of % kept changing while this write waited for them', v_name
                 USING ERRCODE = 'serialization_failure', DETAIL = format('Still to write: %s.', array_to_string(v_todo, ', ')),
                       HINT = 'retry the transaction';
         END IF;

@@ -14,7 +14,8 @@
 -- Views of others over the class's tables would read a column that changed:
 -- they are refused (TG202), nothing changed. Runs as the owner of the
 -- class's tables (tgsis's): called by add_property, rename_property and
--- drop_property.
+-- drop_property. A property table stored in chunks (tgsis.store_class_in_chunks)
+-- is refused by name (TG100): altering its chunk table is not built.
 CREATE FUNCTION tgsis.alter_class_table(p_class tgsis.catalog, p_table text, p_alters text[],
                                         p_properties jsonb DEFAULT '[]', p_what text DEFAULT NULL)
 RETURNS void
@@ -33,6 +34,17 @@ DECLARE
     v_class_grants aclitem[];
     v_acl     record;
 BEGIN
+    -- a property table stored in chunks (tgsis.store_class_in_chunks): its columns are the chunk table's arrays and
+    -- the face's; altering them is not built, refused by name rather than half done
+    IF to_regclass(format('%I.%I', v_schema, p_table || '_shape')) IS NOT NULL
+       AND to_regclass(format('%I.%I', v_schema, p_table || '_chunk')) IS NOT NULL
+           AND (SELECT c.relkind FROM pg_class c WHERE c.oid = to_regclass(format('%I.%I', v_schema, p_table))) = 'v' THEN
+        RAISE EXCEPTION 'the properties of feature class % are stored in chunks: their columns cannot change yet', p_class.classname
+            USING ERRCODE = 'TG100',
+                  DETAIL = format('%I.%I is a face over %I.%I; adding, renaming or dropping a property there is not built. '
+                                  'SELECT tgsis.store_class_in_rows(%L) stores them as rows again. Nothing was changed.',
+                                  v_schema, p_table, v_schema, p_table || '_chunk', p_class.classname);
+    END IF;
     -- the class view is made again by tgsis.create_class_view; the rights granted on it since are kept
     SELECT c.relacl INTO v_class_grants FROM pg_class c
      WHERE c.oid = to_regclass(format('%I.%I', v_schema, p_class.viewname));

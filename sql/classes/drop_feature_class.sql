@@ -62,6 +62,14 @@ BEGIN
             DELETE FROM tgsis.versioned_tables WHERE schemaname = v_class.schemaname AND tablename = v_table;
             DELETE FROM tgsis.revision_objects WHERE schemaname = v_class.schemaname AND tablename = v_table;
             DELETE FROM tgsis.versioning_dropped WHERE schemaname = v_class.schemaname AND tablename = v_table;
+        ELSIF to_regclass(format('%I.%I', v_class.schemaname, v_table || '_shape')) IS NOT NULL
+              AND to_regclass(format('%I.%I', v_class.schemaname, v_table || '_chunk')) IS NOT NULL
+           AND (SELECT c.relkind FROM pg_class c WHERE c.oid = to_regclass(format('%I.%I', v_class.schemaname, v_table))) = 'v' THEN
+            -- stored in chunks (tgsis.store_class_in_chunks): the face, the decoded view, the chunks, the row definition
+            EXECUTE format('DROP VIEW %I.%I', v_class.schemaname, v_table);
+            EXECUTE format('DROP VIEW %I.%I', v_class.schemaname, v_table || '_chunk_rows');
+            EXECUTE format('DROP TABLE %I.%I', v_class.schemaname, v_table || '_chunk');
+            EXECUTE format('DROP TABLE %I.%I', v_class.schemaname, v_table || '_shape');
         ELSE
             EXECUTE format('DROP TABLE %I.%I', v_class.schemaname, v_table);
         END IF;
