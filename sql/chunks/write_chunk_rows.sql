@@ -26,6 +26,11 @@
 --    stays the same bit for bit is not written at all. A new chunk that a
 --    concurrent writer inserted meanwhile (its insert waited for it) is done
 --    again by step 1 for those chunks only, reading what it committed.
+--    Each chunk is merged on its own (a LATERAL subquery: its visible version
+--    found by key, its slots unnested, joined with its few new rows and
+--    aggregated in slot order), so the work grows with the chunks touched, never
+--    with sorts or joins of every slot of the write at once (a scattered 1 %
+--    edit touches nearly every chunk: docs/performance.md).
 -- Any isolation level: in READ COMMITTED each statement sees what the writers
 -- it waited for committed (the locks of step 2, the retry of step 3); in
 -- REPEATABLE READ and SERIALIZABLE (a session's default isolation: psql, an
@@ -202,37 +207,41 @@ BEGIN
         'cc', quote_ident(v_cc),
         'mask', v_size - 1,
         'K', array_to_string(v_k, ', '),
-        'v_K', array_to_string(ARRAY(SELECT 'v.' || k FROM unnest(v_k) AS k), ', '),
-        'o_K', array_to_string(ARRAY(SELECT 'o.' || k FROM unnest(v_k) AS k), ', '),
         'n_K', array_to_string(ARRAY(SELECT 'n.' || k FROM unnest(v_k) AS k), ', '),
         'k_K', array_to_string(ARRAY(SELECT 'k.' || k FROM unnest(v_k) AS k), ', '),
-        'e_K', array_to_string(ARRAY(SELECT 'e.' || k FROM unnest(v_k) AS k), ', '),
         'c_K', array_to_string(ARRAY(SELECT 'c.' || k FROM unnest(v_k) AS k), ', '),
         'i_K', array_to_string(ARRAY(SELECT 'i.' || k FROM unnest(v_k) AS k), ', '),
         'match_c_k', array_to_string(ARRAY(SELECT format('c.%s = k.%s', k, k) FROM unnest(v_k) AS k), ' AND '),
-        'match_n_o', array_to_string(ARRAY(SELECT format('n.%s = o.%s', k, k) FROM unnest(v_k) AS k), ' AND '),
-        'match_m_k', array_to_string(ARRAY(SELECT format('m.%s = k.%s', k, k) FROM unnest(v_k) AS k), ' AND '),
-        'match_m_e', array_to_string(ARRAY(SELECT format('m.%s = e.%s', k, k) FROM unnest(v_k) AS k), ' AND '),
-        'match_v_n', array_to_string(ARRAY(SELECT format('v.%s = n.%s', k, k) FROM unnest(v_k) AS k), ' AND '),
-        'match_v_e', array_to_string(ARRAY(SELECT format('v.%s = e.%s', k, k) FROM unnest(v_k) AS k), ' AND '),
         'arrays', array_to_string(ARRAY(SELECT format('v.%I', f) FROM unnest(v_floats) AS f)
                                   || ARRAY(SELECT format('v.%I, v.%I', r, r || '_wide') FROM unnest(v_refs) AS r), ', '),
         'alias', array_to_string(ARRAY(SELECT quote_ident(f) FROM unnest(v_floats) AS f)
                                  || ARRAY(SELECT format('%I, %I', r, r || '_wide') FROM unnest(v_refs) AS r), ', '),
-        'present', CASE WHEN v_reg.classname IS NOT NULL THEN 'NOT coalesce(u.o = ANY (v.holes), false)'
-                        WHEN cardinality(v_floats) > 0 THEN format('u.%I IS NOT NULL', v_floats[1])
-                        ELSE format('(u.%I IS NOT NULL OR u.%I IS NOT NULL)', v_refs[1], v_refs[1] || '_wide') END,
-        'decoded', array_to_string(
-            ARRAY(SELECT format('u.%I', f) FROM unnest(v_floats) AS f)
-            || ARRAY(SELECT format('CASE WHEN v.vbase IS NOT NULL THEN v.vbase + %s ELSE u.%I END AS %I',
-                                   CASE WHEN r = v_refs[1] THEN format('u.%I', r) ELSE format('u.%I + u.%I', v_refs[1], r) END,
-                                   r || '_wide', r)
-                     FROM unnest(v_refs) AS r), ', '),
+        -- a slot present in the merged chunk: a model table's first value column is NOT NULL exactly there (its
+        -- columns are all NOT NULL); a class's property may be NULL, so there an old slot is present when it is
+        -- within the old arrays and not one of their holes, a new one when it is not deleted
+        'mpresent', CASE WHEN v_reg.classname IS NOT NULL THEN 'm._present'
+                         ELSE format('m.%I IS NOT NULL', coalesce(v_floats[1], v_refs[1])) END,
+        'presentcol', CASE WHEN v_reg.classname IS NOT NULL
+                           THEN format(', CASE WHEN u.slot IS NULL THEN o.slot <= coalesce(cardinality(v.%I), 0) '
+                                       'AND NOT coalesce(o.slot = ANY (v.holes), false) ELSE NOT u._delete END AS _present',
+                                       v_floats[1])
+                           ELSE '' END,
+        'u_K', array_to_string(ARRAY(SELECT 'u.' || k FROM unnest(v_k) AS k), ', '),
+        'match_ug_k', array_to_string(ARRAY(SELECT format('ug.%s = k.%s', k, k) FROM unnest(v_k) AS k), ' AND '),
+        'uarr', array_to_string(ARRAY(SELECT format('array_agg(u.%I) AS %I', c, c) FROM unnest(v_vals) AS c), ', '),
+        'ugarr', array_to_string(ARRAY(SELECT format('ug.%I', c) FROM unnest(v_vals) AS c), ', '),
+        'unames', array_to_string(ARRAY(SELECT quote_ident(c) FROM unnest(v_vals) AS c), ', '),
+        'mvals', array_to_string(ARRAY(
+            SELECT format('CASE WHEN u.slot IS NULL THEN %s WHEN NOT u._delete THEN u.%I END AS %I',
+                          CASE WHEN c = ANY (v_refs)
+                               THEN format('CASE WHEN v.vbase IS NOT NULL THEN v.vbase + %s ELSE o.%I END',
+                                           CASE WHEN c = v_refs[1] THEN format('o.%I', c) ELSE format('o.%I + o.%I', v_refs[1], c) END,
+                                           c || '_wide')
+                               ELSE format('o.%I', c) END, c, c)
+              FROM unnest(v_vals) AS c), ', '),
         'rvals', array_to_string(ARRAY(SELECT format('r.%I::%s AS %I', c.name, c.typename, c.name)
                                          FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'value') ORDER BY c.colorder)
                                  || ARRAY(SELECT format('r.%I::bigint AS %I', r, r) FROM unnest(v_refs) AS r), ', '),
-        'o_vals', array_to_string(ARRAY(SELECT 'o.' || quote_ident(c) FROM unnest(v_vals) AS c), ', '),
-        'n_vals', array_to_string(ARRAY(SELECT 'n.' || quote_ident(c) FROM unnest(v_vals) AS c), ', '),
         -- a chunk's refs are relative when every difference fits integer, else absolute in the _wide columns
         -- (and the maxima of vtop, the chunk's bound of its vertex ids: vbase + 2 * the largest relative value, or
         -- the largest _wide id; chunk_encoding_checks says why twice)
@@ -248,12 +257,13 @@ BEGIN
                                             FROM unnest(v_refs[2:]) AS r), ''),
                                 coalesce((SELECT string_agg(format(', max(m.%1$I - m.%2$I)', r, v_refs[1]), '')
                                             FROM unnest(v_refs[2:]) AS r), '')) END,
+        -- (the FILTERs: the columns a chunk does not use are not sorted)
         'enc', array_to_string(
-            ARRAY(SELECT format('array_agg(m.%I ORDER BY s.slot) AS %I', f, f) FROM unnest(v_floats) AS f)
-            || ARRAY(SELECT format('CASE WHEN e.fits THEN array_agg(CASE WHEN e.fits THEN (m.%I - %s)::integer END ORDER BY s.slot) END AS %I',
+            ARRAY(SELECT format('array_agg(m.%I ORDER BY m.slot) AS %I', f, f) FROM unnest(v_floats) AS f)
+            || ARRAY(SELECT format('CASE WHEN e.fits THEN array_agg(CASE WHEN e.fits THEN (m.%I - %s)::integer END ORDER BY m.slot) FILTER (WHERE e.fits) END AS %I',
                                    r, CASE WHEN r = v_refs[1] THEN 'e.vmin' ELSE format('m.%I', v_refs[1]) END, r)
                      FROM unnest(v_refs) AS r)
-            || ARRAY(SELECT format('CASE WHEN NOT e.fits THEN array_agg(m.%I ORDER BY s.slot) END AS %I', r, r || '_wide')
+            || ARRAY(SELECT format('CASE WHEN NOT e.fits THEN array_agg(m.%I ORDER BY m.slot) FILTER (WHERE NOT e.fits) END AS %I', r, r || '_wide')
                      FROM unnest(v_refs) AS r), ', '),
         'setcols', array_to_string(ARRAY['holes = n.holes']
                                    || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['vbase = n.vbase', 'vtop = n.vtop'] ELSE '{}'::text[] END
@@ -264,9 +274,9 @@ BEGIN
                                    || ARRAY(SELECT quote_ident(c) FROM unnest(v_vals) AS c)
                                    || ARRAY(SELECT quote_ident(r || '_wide') FROM unnest(v_refs) AS r), ', '),
         -- a chunk whose new content is the visible one bit for bit (array_send: -0.0 is not 0.0) is not written
-        'same', array_to_string(ARRAY['n.holes IS NOT DISTINCT FROM v.holes']
-                                || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['n.vbase IS NOT DISTINCT FROM v.vbase'] ELSE '{}'::text[] END
-                                || ARRAY(SELECT format('array_send(n.%1$I) IS NOT DISTINCT FROM array_send(v.%1$I)', c)
+        'same', array_to_string(ARRAY['z.holes IS NOT DISTINCT FROM v.holes']
+                                || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['z.vbase IS NOT DISTINCT FROM v.vbase'] ELSE '{}'::text[] END
+                                || ARRAY(SELECT format('array_send(z.%1$I) IS NOT DISTINCT FROM array_send(v.%1$I)', c)
                                            FROM unnest(v_vals || ARRAY(SELECT r || '_wide' FROM unnest(v_refs) AS r)) AS c),
                                 ' AND '),
         'insvals', array_to_string(ARRAY(SELECT 'n.' || k FROM unnest(v_k) AS k) || ARRAY['$2', 'n.holes']
@@ -276,50 +286,50 @@ BEGIN
     v_sql := $q$
 WITH k AS (
     SELECT DISTINCT {newk_as} FROM {rows} r WHERE {todo}
-), v AS (
-    SELECT c.tableoid AS vtoid, c.ctid AS vtid, c.* FROM {chunk} c JOIN k ON {match_c_k} WHERE {vis}
-), old AS (
-    SELECT {v_K}, u.o AS slot, {decoded}
-      FROM v CROSS JOIN LATERAL unnest({arrays}) WITH ORDINALITY AS u({alias}, o)
-     WHERE {present}
 ), upsert AS (
     SELECT {newk_as}, (r.{cc} & {mask}) + 1 AS slot, r._delete, {rvals} FROM {rows} r WHERE {todo}
-), m AS (
-    SELECT {o_K}, o.slot, {o_vals} FROM old o
-     WHERE NOT EXISTS (SELECT FROM upsert n WHERE {match_n_o} AND n.slot = o.slot)
-    UNION ALL
-    SELECT {n_K}, n.slot, {n_vals} FROM upsert n WHERE NOT n._delete
-), e AS (
-    SELECT {k_K}, max(m.slot) AS last, {fit}
-      FROM k LEFT JOIN m ON {match_m_k}
-     GROUP BY {k_K}
+), ug AS (  -- the upserts and deletes of each touched chunk, as arrays (a few per chunk)
+    SELECT {u_K}, max(u.slot) AS umax, array_agg(u.slot) AS uslot, array_agg(u._delete) AS udel, {uarr}
+      FROM upsert u GROUP BY {u_K}
+), en AS (  -- each touched chunk merged and encoded on its own (its slots sorted in memory, not the whole write's)
+    SELECT {k_K}, v.vtoid, v.vtid, v.revision AS vrev, z.*,
+           (v.vtid IS NOT NULL AND z.last IS NOT NULL AND {same}) AS unchanged
+      FROM k JOIN ug ON {match_ug_k}
+      LEFT JOIN LATERAL (  -- the visible version, found by key (the primary key's index)
+        SELECT c.tableoid AS vtoid, c.ctid AS vtid, c.* FROM {chunk} c WHERE {match_c_k} AND {vis}
+      ) v ON true
+     CROSS JOIN LATERAL (
+        WITH m AS MATERIALIZED (  -- every slot up to the last old or new one: the value written (NULL: a hole)
+            SELECT o.slot, {mvals}{presentcol}  -- (the NULL array as long as the last new slot extends the old arrays to it)
+              FROM unnest({arrays}, array_fill(NULL::integer, ARRAY[ug.umax::integer])) WITH ORDINALITY AS o({alias}, pad, slot)
+              LEFT JOIN unnest(ug.uslot, ug.udel, {ugarr}) AS u(slot, _delete, {unames}) ON u.slot = o.slot
+        ), e AS (
+            SELECT max(m.slot) FILTER (WHERE {mpresent}) AS last, {fit} FROM m
+        )
+        SELECT e.last, CASE WHEN e.fits THEN e.vmin END AS vbase, e.vtop, f.*
+          FROM e LEFT JOIN LATERAL (
+            SELECT array_agg(m.slot::smallint ORDER BY m.slot) FILTER (WHERE NOT {mpresent}) AS holes, {enc}
+              FROM m WHERE m.slot <= e.last
+          ) f ON true
+     ) z
+), e AS (  -- every touched chunk: its visible version (vtoid, vtid, vrev: NULL when none) and new content (last NULL: none)
+    SELECT * FROM en
 ), n AS (
-    SELECT {e_K}, CASE WHEN e.fits THEN e.vmin END AS vbase, e.vtop,
-           array_agg(s.slot::smallint ORDER BY s.slot) FILTER (WHERE m.slot IS NULL) AS holes, {enc}
-      FROM e CROSS JOIN LATERAL generate_series(1, e.last::integer) AS s(slot)
-      LEFT JOIN m ON {match_m_e} AND m.slot = s.slot
-     WHERE e.last IS NOT NULL
-     GROUP BY {e_K}, e.vmin, e.fits, e.vtop
-), same AS (
-    SELECT v.vtoid, v.vtid FROM v JOIN n ON {match_v_n} WHERE {same}
+    SELECT * FROM en WHERE en.last IS NOT NULL
 ), upd AS (
-    UPDATE {chunk} c SET {setcols} FROM v, n
-     WHERE c.tableoid = v.vtoid AND c.ctid = v.vtid AND v.revision = $2 AND {match_v_n}
-       AND NOT EXISTS (SELECT FROM same s WHERE s.vtoid = v.vtoid AND s.vtid = v.vtid)
+    UPDATE {chunk} c SET {setcols} FROM n
+     WHERE c.tableoid = n.vtoid AND c.ctid = n.vtid AND n.vrev = $2 AND NOT n.unchanged
     RETURNING {c_K}
 ), del AS (
-    DELETE FROM {chunk} c USING v, e
-     WHERE c.tableoid = v.vtoid AND c.ctid = v.vtid AND v.revision = $2 AND {match_v_e} AND e.last IS NULL
+    DELETE FROM {chunk} c USING e
+     WHERE c.tableoid = e.vtoid AND c.ctid = e.vtid AND e.vrev = $2 AND e.last IS NULL
     RETURNING {c_K}
 ), cls AS (
-    UPDATE {chunk} c SET lastrevs = c.lastrevs || $2 FROM v
-     WHERE c.tableoid = v.vtoid AND c.ctid = v.vtid AND v.revision <> $2
-       AND NOT EXISTS (SELECT FROM same s WHERE s.vtoid = v.vtoid AND s.vtid = v.vtid)
+    UPDATE {chunk} c SET lastrevs = c.lastrevs || $2 FROM e
+     WHERE c.tableoid = e.vtoid AND c.ctid = e.vtid AND e.vrev <> $2 AND NOT e.unchanged
     RETURNING {c_K}
 ), fresh AS (  -- the new versions: no visible one is W's or already holds this content
-    SELECT n.* FROM n
-     WHERE NOT EXISTS (SELECT FROM v WHERE {match_v_n}
-                         AND (v.revision = $2 OR EXISTS (SELECT FROM same s WHERE s.vtoid = v.vtoid AND s.vtid = v.vtid)))
+    SELECT n.* FROM n WHERE NOT (n.vtid IS NOT NULL AND (n.vrev = $2 OR n.unchanged))
 ), ins AS (
     INSERT INTO {chunk} ({inscols})
     SELECT {insvals} FROM fresh n
