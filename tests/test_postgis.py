@@ -845,17 +845,16 @@ def _store_in_chunks(conn: Conn) -> None:
 
 def _chunk_contents(conn: Conn, table: str, geoid: int) -> list[tuple[Any, ...]]:
     """Every stored chunk version of an object, its arrays as their send forms (bit for bit), but geoid and revision."""
-    columns = [
-        r[0]
-        for r in conn.execute(
-            "SELECT attname FROM pg_attribute WHERE attrelid = %s::regclass AND attnum > 0 AND NOT attisdropped"
-            " AND attname NOT IN ('geoid', 'revision', 'lastrevs', 'revclosed') ORDER BY attnum",
-            (f"tgsis.{table}_chunk",),
-        ).fetchall()
-    ]
+    # (the arrays by their send forms, the scalars as they are: chunk, vbase, vtop, ... whatever the layout holds)
+    columns = conn.execute(
+        "SELECT a.attname, t.typcategory = 'A' FROM pg_attribute a JOIN pg_type t ON t.oid = a.atttypid"
+        " WHERE a.attrelid = %s::regclass AND a.attnum > 0 AND NOT a.attisdropped"
+        " AND a.attname NOT IN ('geoid', 'revision', 'lastrevs', 'revclosed') ORDER BY a.attnum",
+        (f"tgsis.{table}_chunk",),
+    ).fetchall()
     select = sql.SQL(", ").join(
-        sql.SQL("array_send({})").format(sql.Identifier(c)) if c not in ("chunk", "vbase") else sql.Identifier(c)
-        for c in columns
+        sql.SQL("array_send({})").format(sql.Identifier(c)) if is_array else sql.Identifier(c)
+        for c, is_array in columns
     )
     query = sql.SQL("SELECT {} FROM tgsis.{} WHERE geoid = %s ORDER BY chunk").format(
         select, sql.Identifier(f"{table}_chunk")
