@@ -49,6 +49,30 @@ BEGIN
         RAISE EXCEPTION 'the storage of % does not exist', format('%I.%I', v_reg.schemaname, v_reg.tablename)
             USING ERRCODE = 'TG200', HINT = 'create the storage of the data models first';
     END IF;
+    -- a class's property may be named anything its registration allows; the chunk table's own columns (chunk,
+    -- revision, lastrevs, revclosed, holes, vbase, vtop) and the names this layer's generated SQL uses (slot, pad,
+    -- o, q, w, ...: tgsis.chunk_reserved_names) may not: such a property would be dropped from the chunks (the
+    -- versioning columns are left out of every row table) or break the statements that name it
+    IF v_class THEN
+        SELECT string_agg(quote_literal(a.attname), ', ' ORDER BY a.attnum) INTO v_bad
+          FROM pg_attribute a
+         WHERE a.attrelid = v_storage AND a.attnum > 0 AND NOT a.attisdropped
+           AND a.attname NOT IN (v_reg.keycolumn, v_reg.chunkcolumn)
+           AND a.attname = ANY (tgsis.chunk_reserved_names())
+           -- (a versioned table's storage <table>_ver holds the versioning columns of these names itself)
+           AND NOT (a.attname IN ('revision', 'lastrevs', 'revclosed')
+                    AND EXISTS (SELECT FROM tgsis.versioned_tables t
+                                 WHERE t.schemaname = v_reg.schemaname AND t.tablename = v_reg.tablename));
+        IF v_bad IS NOT NULL THEN
+            RAISE EXCEPTION 'the properties % of % have names the chunk layer uses itself', v_bad,
+                            format('%I.%I', v_reg.schemaname, v_reg.tablename)
+                USING ERRCODE = 'TG100',
+                      DETAIL = format('A property stored in chunks may not be named as the chunk table''s own columns or the '
+                                      'names its statements use: %s.',
+                                      array_to_string(tgsis.chunk_reserved_names(), ', ')),
+                      HINT = 'rename the property first (its values are kept), then store the class in chunks';
+        END IF;
+    END IF;
     RETURN QUERY
     WITH pk AS (
         SELECT a.attname::text AS name, k.ord::integer AS keyorder

@@ -38,20 +38,9 @@ DECLARE
     v_face      regclass;
     v_kind      "char";
     v_users     text;
-    v_owner     name;
-    v_comment   text;
-    v_force     boolean;
-    v_facedef   text;
     v_triggers  text[];
     v_trigger   text;
-    v_names     text[];
-    v_defs      text[];
-    v_index     record;
-    v_cols      text;
-    v_sends     text;
     v_n         bigint;
-    v_diff      bigint;
-    v_new       regclass;
 BEGIN
     IF p_partitions IS NULL OR p_partitions NOT BETWEEN 2 AND 1024 THEN
         RAISE EXCEPTION 'number of partitions % is out of range', coalesce(p_partitions::text, 'NULL')
@@ -79,25 +68,10 @@ BEGIN
     END IF;
     -- what refers to the storage, besides its versioned view (made again over the new one), would block the
     -- swap; a user's trigger would be lost (LIKE copies none; tgsis's own, of versioned storage, are made again)
-    SELECT string_agg(DISTINCT u, ', ') INTO v_users FROM (
-        SELECT CASE WHEN d.classid = 'pg_rewrite'::regclass
-                    THEN (SELECT 'view ' || r.ev_class::regclass::text FROM pg_rewrite r WHERE r.oid = d.objid)
-                    ELSE pg_describe_object(d.classid, d.objid, 0) END
-          FROM pg_depend d
-         WHERE d.refclassid = 'pg_class'::regclass AND d.refobjid = v_store AND d.deptype = 'n'
-           AND NOT (d.classid = 'pg_rewrite'::regclass AND v_face IS NOT NULL
-                    AND EXISTS (SELECT FROM pg_rewrite r WHERE r.oid = d.objid AND r.ev_class = v_face))
-           AND NOT (d.classid = 'pg_constraint'::regclass        -- the table's own checks name its columns
-                    AND EXISTS (SELECT FROM pg_constraint c WHERE c.oid = d.objid AND c.conrelid = v_store))
-           AND NOT (d.classid = 'pg_policy'::regclass            -- its own policies (copied)
-                    AND EXISTS (SELECT FROM pg_policy p WHERE p.oid = d.objid AND p.polrelid = v_store))
-           AND d.classid NOT IN ('pg_trigger'::regclass, 'pg_attrdef'::regclass)
-        UNION ALL
-        SELECT format('trigger %s on %s', t.tgname, t.tgrelid::regclass)
-          FROM pg_trigger t
-         WHERE NOT t.tgisinternal AND t.tgrelid = v_store
-           AND NOT (v_versioned AND t.tgname IN ('tgsis_storage_write', 'tgsis_storage_rows', 'tgsis_storage_changes'))
-    ) AS s(u);
+    v_users := tgsis.relation_users(v_store, CASE WHEN v_face IS NOT NULL THEN ARRAY[v_face] ELSE '{}' END,
+                                    CASE WHEN v_versioned
+                                         THEN ARRAY['tgsis_storage_write', 'tgsis_storage_rows', 'tgsis_storage_changes']::name[]
+                                         ELSE '{}' END);
     IF v_users IS NOT NULL THEN
         RAISE EXCEPTION 'tgsis.% is used by other objects', quote_ident(v_name)
             USING ERRCODE = 'TG202', DETAIL = 'used by: ' || v_users,
@@ -117,63 +91,12 @@ BEGIN
         RETURN 0;
     END IF;
 
-    -- what the new table takes from the old one (read while they name it tgsis.<name>: the same text names the new one)
-    SELECT c.relowner::regrole::name, obj_description(c.oid, 'pg_class'), c.relforcerowsecurity
-      INTO v_owner, v_comment, v_force FROM pg_class c WHERE c.oid = v_store;
-    IF v_face IS NOT NULL THEN
-        SELECT format('CREATE OR REPLACE VIEW %s%s AS %s', v_face, coalesce(' WITH (' || array_to_string(c.reloptions, ', ') || ')', ''),
-                      rtrim(pg_get_viewdef(c.oid), '; ' || chr(10)))
-          INTO v_facedef FROM pg_class c WHERE c.oid = v_face;
-    END IF;
+    -- tgsis's triggers of versioned storage, read while they name the old table tgsis.<name> (the same text
+    -- names the new one), made again once the rows are moved (nothing to note)
     SELECT array_agg(pg_get_triggerdef(t.oid) ORDER BY t.tgname) INTO v_triggers
       FROM pg_trigger t WHERE NOT t.tgisinternal AND t.tgrelid = v_store;
-    SELECT array_agg(c.relname::text ORDER BY c.relname), array_agg(split_part(pg_get_indexdef(i.indexrelid), ' USING ', 2) ORDER BY c.relname)
-      INTO v_names, v_defs
-      FROM pg_index i JOIN pg_class c ON c.oid = i.indexrelid WHERE i.indrelid = v_store;
-    SELECT string_agg(quote_ident(a.attname), ', ' ORDER BY a.attnum),
-           string_agg(CASE WHEN t.typcategory = 'A' THEN format('pg_catalog.array_send(%I)', a.attname)
-                           WHEN t.typname = 'float8' THEN format('pg_catalog.float8send(%I)', a.attname)
-                           WHEN t.typname = 'float4' THEN format('pg_catalog.float4send(%I)', a.attname)
-                           ELSE format('%I::text', a.attname) END, ', ' ORDER BY a.attnum)
-      INTO v_cols, v_sends
-      FROM pg_attribute a JOIN pg_type t ON t.oid = a.atttypid
-     WHERE a.attrelid = v_store AND a.attnum > 0 AND NOT a.attisdropped AND a.attgenerated = '';
-
-    -- the new table beside the old one, partitioned, with the old one's rights
-    EXECUTE format('ALTER TABLE tgsis.%I RENAME TO %I', v_name, v_old);
-    EXECUTE format('CREATE TABLE tgsis.%I (LIKE tgsis.%I INCLUDING ALL) PARTITION BY HASH (geoid)', v_name, v_old);
-    v_new := format('tgsis.%I', v_name)::regclass;
-    EXECUTE format('ALTER TABLE %s OWNER TO %I', v_new, v_owner);
-    EXECUTE format('COMMENT ON TABLE %s IS %L', v_new, v_comment);
-    PERFORM tgsis.create_hash_partitions(v_name, p_partitions, v_owner);
-    PERFORM tgsis.copy_relation_rights(v_store, v_new);
-    IF v_force THEN
-        EXECUTE format('ALTER TABLE %s FORCE ROW LEVEL SECURITY', v_new);
-    END IF;
-
-    -- the rows, moved (before the triggers are made: nothing to note) and verified, each column by its send form
-    EXECUTE format('INSERT INTO %s (%s) SELECT %s FROM %s', v_new, v_cols, v_cols, v_store);
-    GET DIAGNOSTICS v_n = ROW_COUNT;
-    EXECUTE format('SELECT count(*) FROM ((SELECT %1$s FROM %2$s EXCEPT ALL SELECT %1$s FROM %3$s) '
-                   'UNION ALL (SELECT %1$s FROM %3$s EXCEPT ALL SELECT %1$s FROM %2$s)) AS d', v_sends, v_store, v_new)
-       INTO STRICT v_diff;
-    IF v_diff <> 0 THEN
-        RAISE EXCEPTION 'the partitioned storage of tgsis.% differs from its storage in % rows', quote_ident(p_table), v_diff
-            USING ERRCODE = 'TG000', DETAIL = 'Nothing was changed.';
-    END IF;
-
-    -- the versioned view reads the new table; the old one goes, its index names and triggers are taken
-    IF v_facedef IS NOT NULL THEN
-        EXECUTE v_facedef;
-    END IF;
-    EXECUTE format('DROP TABLE %s', v_store);
-    FOR v_index IN SELECT i.indexrelid::regclass AS idx, c.relname::text AS name,
-                          v_names[array_position(v_defs, split_part(pg_get_indexdef(i.indexrelid), ' USING ', 2))] AS old
-                     FROM pg_index i JOIN pg_class c ON c.oid = i.indexrelid WHERE i.indrelid = v_new LOOP
-        IF v_index.old IS NOT NULL AND v_index.old <> v_index.name THEN
-            EXECUTE format('ALTER INDEX %s RENAME TO %I', v_index.idx, v_index.old);  -- a key's constraint too
-        END IF;
-    END LOOP;
+    v_n := tgsis.swap_into_hash_partitions(v_store, p_partitions,
+                                           CASE WHEN v_face IS NOT NULL THEN ARRAY[v_face] ELSE '{}' END);
     FOREACH v_trigger IN ARRAY coalesce(v_triggers, '{}') LOOP
         EXECUTE v_trigger;
     END LOOP;
