@@ -677,21 +677,28 @@ def _read_change(
         (v0 if alignment == "VERTEX" else c0).append(np.asarray(columns[1], dtype=np.int64))
     v0_ids, c0_ids = np.unique(np.concatenate(v0)), np.unique(np.concatenate(c0))
 
+    def decoded_by(function: str, call: str, args: tuple[Any, ...], fallback: str) -> str:
+        """The relation (a parenthesized subquery, aliased by the reads) that ``call`` of the SQL function
+        ``function`` (its signature) names for ``args``; ``fallback`` for a role that may not execute it (granted to
+        tgsis's roles: another role reads the decoded view, as before)."""
+        allowed = conn.execute("SELECT has_function_privilege(%s, 'EXECUTE')", (function,)).fetchone()
+        if not (allowed and allowed[0]):
+            return fallback
+        row = conn.execute(call, args).fetchone()
+        assert row is not None
+        return str(row[0])
+
     def holding(t: _Table, s: str, ids: npt.NDArray[np.int64]) -> str:
         """The relation to read rows of ``ids`` from: of a table stored in chunks, only the chunks holding them
         decoded (``tgsis.storage_row_versions``, the merges' one way to name it); else the storage ``s``."""
         if s != f"tgsis.{t.view}_chunk_rows" or not len(ids):
             return s
-        allowed = conn.execute(  # (granted to tgsis's roles: another role reads the decoded view, as before)
-            "SELECT has_function_privilege('tgsis.storage_row_versions(text, text, bigint[])', 'EXECUTE')"
-        ).fetchone()
-        if not (allowed and allowed[0]):
-            return s
-        row = conn.execute(
-            "SELECT tgsis.storage_row_versions(%s, %s, %s::bigint[])", (t.schema, t.view, np.unique(ids).tolist())
-        ).fetchone()
-        assert row is not None
-        return str(row[0])  # a parenthesized subquery, aliased by the reads
+        return decoded_by(
+            "tgsis.storage_row_versions(text, text, bigint[])",
+            "SELECT tgsis.storage_row_versions(%s, %s, %s::bigint[])",
+            (t.schema, t.view, np.unique(ids).tolist()),
+            s,
+        )
 
     def around(vertex_ids: npt.NDArray[np.int64]) -> str:
         """The relation to read the cells on ``vertex_ids`` from: of a table stored in chunks, only the chunks whose
@@ -699,16 +706,12 @@ def _read_change(
         the storage ``cell_s``, whose vertex BRIN :func:`on` searches."""
         if cell_s != f"tgsis.{cell_t.view}_chunk_rows" or not len(vertex_ids):
             return cell_s
-        allowed = conn.execute(  # (granted to tgsis's roles: another role reads the decoded view, as before)
-            "SELECT has_function_privilege('tgsis.storage_cells_on(text, bigint[])', 'EXECUTE')"
-        ).fetchone()
-        if not (allowed and allowed[0]):
-            return cell_s
-        row = conn.execute(
-            "SELECT tgsis.storage_cells_on(%s, %s::bigint[])", (cell_t.view, np.unique(vertex_ids).tolist())
-        ).fetchone()
-        assert row is not None
-        return str(row[0])
+        return decoded_by(
+            "tgsis.storage_cells_on(text, bigint[])",
+            "SELECT tgsis.storage_cells_on(%s, %s::bigint[])",
+            (cell_t.view, np.unique(vertex_ids).tolist()),
+            cell_s,
+        )
 
     def cells(where: sql.Composable, within: str = cell_s) -> list[npt.NDArray[Any]]:
         return columns_out_all(
