@@ -591,3 +591,31 @@ def test_names_near_the_reserved_ones_go_through_the_whole_switch(conn: Conn) ->
     conn.execute("SELECT tgsis.store_class_in_rows('near')")
     conn.commit()
     assert conn.execute(read).fetchall() == expected
+
+
+@pytest.mark.parametrize(
+    "setup",
+    [
+        "ALTER TABLE public.layer_cellpros ENABLE ROW LEVEL SECURITY",
+        "CREATE POLICY porous ON public.layer_cellpros FOR SELECT USING (porosity > 0.1)",
+        "CREATE FUNCTION public.audit() RETURNS trigger LANGUAGE plpgsql AS $$BEGIN RETURN NEW; END$$; "
+        "CREATE TRIGGER audit BEFORE UPDATE ON public.layer_cellpros FOR EACH ROW EXECUTE FUNCTION public.audit()",
+        "CREATE VIEW public.porous AS SELECT _geoid, _idx FROM public.layer_cellpros WHERE porosity > 0.1",
+    ],
+    ids=["row-level security", "policy", "trigger", "view"],
+)
+def test_what_a_face_could_not_carry_is_refused_by_name(conn: Conn, setup: str) -> None:
+    """Row-level security, a policy, a user's trigger or view on the property table: the face (a view) could not
+    carry them and the rows' drop would lose them without an error, so the switch is refused, nothing changed."""
+    geoid, _ = _surface_class(conn)
+    conn.execute(setup)
+    conn.commit()
+    before = _layer_rows(conn)
+    state, message = sqlstate(conn, "SELECT tgsis.store_class_in_chunks('layer')")
+    assert state == "TG202", message
+    conn.rollback()
+    assert conn.execute("SELECT relkind FROM pg_class WHERE oid = 'public.layer_cellpros'::regclass").fetchone() == (
+        "r",
+    )
+    assert conn.execute("SELECT to_regclass('public.layer_cellpros_chunk')").fetchone() == (None,)
+    assert _layer_rows(conn) == before and geoid in {r[0] for r in before}

@@ -47,4 +47,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.copy_relation_rights(regclass, regclass) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.copy_relation_rights(regclass, regclass) IS
-    'grant a new relation what another grants (other than to its owner, grant options kept), enable row-level security when the other has it, and copy its policies with their comments; called by tgsis.create_chunk_table and tgsis.partition_chunk_storage';
+    'grant a new relation what another grants (other than to its owner, grant options kept), enable row-level security when the other has it, and copy its policies with their comments; called by tgsis.create_chunk_table, tgsis.swap_into_hash_partitions and tgsis.store_class_in_rows';

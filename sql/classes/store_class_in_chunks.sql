@@ -14,6 +14,9 @@
 -- drop_property are refused by name (TG100) while they are; drop_feature_class
 -- drops the chunk table with the class. tgsis.store_class_in_rows goes back.
 -- Vector properties have no chunk form yet (TG100, tgsis.chunk_columns).
+-- A table with row-level security, policies, a user's trigger, or a view or
+-- foreign key over it is refused by name (TG202): a view can carry none of
+-- them, and dropping the rows would lose them without an error.
 -- SECURITY DEFINER: the class's tables belong to tgsis's owner. Returns the
 -- chunk versions written.
 CREATE FUNCTION tgsis.store_class_in_chunks(p_class text)
@@ -27,6 +30,7 @@ DECLARE
     v_class tgsis.catalog;
     v_name  text;      -- the property table as the chunk layer names it (tgsis.chunk_registry)
     v_table regclass;
+    v_users text;
     v_shape text;
     v_pkey  text;
     v_keys  text;
@@ -60,6 +64,19 @@ BEGIN
     END IF;
     v_table := format('%I.%I', v_class.schemaname, v_class.cellprotable)::regclass;
     EXECUTE format('LOCK TABLE %s IN SHARE ROW EXCLUSIVE MODE', v_table);
+    -- what the table carries that a view cannot, or that its drop would take along: row-level security and its
+    -- policies (the rows a role may see), a user's trigger, a view or foreign key over it; dropped with the rows,
+    -- they would be lost without an error, so the switch is refused by name
+    v_users := concat_ws(', ',
+        CASE WHEN (SELECT c.relrowsecurity FROM pg_class c WHERE c.oid = v_table) THEN 'row-level security' END,
+        (SELECT string_agg(format('policy %I', p.polname), ', ' ORDER BY p.polname) FROM pg_policy p WHERE p.polrelid = v_table),
+        tgsis.relation_users(v_table, '{}', '{}'));
+    IF v_users <> '' THEN
+        RAISE EXCEPTION 'the properties of feature class % cannot be stored in chunks: % carries what its face could not',
+                        p_class, v_table
+            USING ERRCODE = 'TG202', DETAIL = 'used by or set on it: ' || v_users,
+                  HINT = 'drop them (and the row-level security), store the class in chunks, then create what a view allows again';
+    END IF;
 
     -- 1. the chunks, verified against the rows (TG100 for a property the layout has no form for)
     PERFORM tgsis.create_chunk_table(v_name);
@@ -95,4 +112,4 @@ REVOKE ALL ON FUNCTION tgsis.store_class_in_chunks(text) FROM PUBLIC;
 GRANT EXECUTE ON FUNCTION tgsis.store_class_in_chunks(text) TO tgsis_admin;
 
 COMMENT ON FUNCTION tgsis.store_class_in_chunks(text) IS
-    'store the property table <schema>.<class>_cellpros of a STATIC class not versioned in chunks (opt-in, tgsis_admin members): <class>_cellpros_chunk filled from the rows and verified (tgsis.rows_to_chunks), the row definition kept as <class>_cellpros_shape, <class>_cellpros made the face over the chunks (today''s columns and grants; INSERT, UPDATE, DELETE through it); TG300 for a versioned class, TG100 for a temporal one or a vector property, TG201 when stored in chunks already; returns the chunk versions written; tgsis.store_class_in_rows goes back';
+    'store the property table <schema>.<class>_cellpros of a STATIC class not versioned in chunks (opt-in, tgsis_admin members): <class>_cellpros_chunk filled from the rows and verified (tgsis.rows_to_chunks), the row definition kept as <class>_cellpros_shape, <class>_cellpros made the face over the chunks (today''s columns and grants; INSERT, UPDATE, DELETE through it); TG300 for a versioned class, TG100 for a temporal one or a vector property, TG201 when stored in chunks already, TG202 when the table has row-level security, policies, a user''s trigger or a view or foreign key over it; returns the chunk versions written; tgsis.store_class_in_rows goes back';

@@ -19,7 +19,6 @@ DECLARE
     v_name  text;
     v_face  regclass;
     v_shape regclass;
-    v_acl   record;
     v_c     record;
     v_n     bigint;
 BEGIN
@@ -40,11 +39,7 @@ BEGIN
         EXECUTE format('ALTER TABLE %s ADD CONSTRAINT %I %s', v_name, v_class.cellprotable || '_pkey', v_c.def);
     END LOOP;
     EXECUTE format('COMMENT ON TABLE %s IS %L', v_name, split_part(obj_description(v_face, 'pg_class'), ', stored in chunks (', 1));
-    FOR v_acl IN SELECT a.grantee, a.privilege_type FROM pg_class c, aclexplode(c.relacl) AS a
-                  WHERE c.oid = v_face AND a.grantee <> c.relowner LOOP
-        EXECUTE format('GRANT %s ON %s TO %s', v_acl.privilege_type, v_name,
-                       CASE WHEN v_acl.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_acl.grantee)) END);
-    END LOOP;
+    PERFORM tgsis.copy_relation_rights(v_face, v_name::regclass);  -- the face's grants, grant options kept
     v_n := tgsis.chunks_to_rows(v_name);  -- verified (TG000: nothing changed)
     -- this session's tables of rows written through the face (tgsis.chunk_face_write) are of its row type; another
     -- session's block the DROP below by name (2BP01: nothing changed)
