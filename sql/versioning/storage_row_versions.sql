@@ -29,19 +29,21 @@ AS $$
 DECLARE
     v_size bigint;
     v_dec  record;
+    v_name text;
 BEGIN
-    IF p_schema IS DISTINCT FROM 'tgsis' OR NOT tgsis.stored_in_chunks(p_table) THEN
+    IF NOT tgsis.stored_in_chunks(p_schema, p_table) THEN
         RETURN tgsis.storage_table(p_schema, p_table);
     END IF;
+    v_name := CASE WHEN p_schema = 'tgsis' THEN p_table ELSE format('%I.%I', p_schema, p_table) END;  -- (tgsis.chunk_registry)
     IF p_ids IS NULL THEN
-        RETURN format('tgsis.%I', p_table || '_chunk_rows');
+        RETURN format('%I.%I', p_schema, p_table || '_chunk_rows');
     END IF;
-    v_size := (SELECT t.chunksize FROM tgsis.model_tables t WHERE t.tablename = p_table);
+    EXECUTE format('SELECT r.chunksize FROM tgsis.%I($1) AS r', 'chunk_registry') INTO v_size USING v_name;
     EXECUTE format('SELECT d.select_list, d.arrays, d.aliases, d.present FROM tgsis.%I($1, $2) AS d', 'chunk_decode_sql')
-       INTO v_dec USING p_table, 'c';
-    RETURN format('(SELECT %s, c.revision, c.lastrevs, c.revclosed FROM tgsis.%I c CROSS JOIN LATERAL unnest(%s) WITH ORDINALITY AS u(%s, o)'
+       INTO v_dec USING v_name, 'c';
+    RETURN format('(SELECT %s, c.revision, c.lastrevs, c.revclosed FROM %I.%I c CROSS JOIN LATERAL unnest(%s) WITH ORDINALITY AS u(%s, o)'
                   ' WHERE %s AND c.chunk = ANY (%L::bigint[]))',
-                  v_dec.select_list, p_table || '_chunk', v_dec.arrays, v_dec.aliases, v_dec.present,
+                  v_dec.select_list, p_schema, p_table || '_chunk', v_dec.arrays, v_dec.aliases, v_dec.present,
                   ARRAY(SELECT DISTINCT i / v_size FROM unnest(p_ids) AS i WHERE i >= 0 ORDER BY 1));
 END
 $$;

@@ -9,7 +9,7 @@ STABLE
 PARALLEL SAFE
 AS $$
     SELECT format('%I.%I', p_schema,
-                  CASE WHEN p_schema = 'tgsis' AND tgsis.stored_in_chunks(p_table) THEN p_table || '_chunk'
+                  CASE WHEN tgsis.stored_in_chunks(p_schema, p_table) THEN p_table || '_chunk'
                        WHEN EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = p_schema AND t.tablename = p_table)
                        THEN p_table || '_ver' ELSE p_table END)
 $$;
