@@ -357,3 +357,69 @@ def test_pg_dump_and_restore_keep_a_versioned_class_in_chunks(pg: Any, db_dsn: s
             "AND tgname LIKE 'tgsis_storage_%'"
         ).fetchone()
         assert triggers == (3,)
+
+
+def test_a_feature_deleted_in_a_version_then_versioning_disabled_and_back_to_rows(conn: Conn) -> None:
+    geoid, _ = _versioned_layer(conn)
+    with tgsis.in_version(conn, "e1"):
+        conn.execute("UPDATE public.layer_cellpros SET facies = 70 WHERE _geoid = %s AND _idx = 1500", (geoid,))
+        conn.commit()
+    tgsis.create_version(conn, "gone")
+    conn.commit()
+    default = _layer(conn)
+    with tgsis.in_version(conn, "gone"):
+        assert F.delete_feature(conn, "layer", geoid)
+        conn.commit()
+        assert _layer(conn) == []
+    with tgsis.in_version(conn, "e1"):
+        assert [r[3] for r in _layer(conn, "_idx = 1500")] == [70]
+    assert _layer(conn) == default  # the deletion closed chunk versions in gone's revision only
+    assert conn.execute("SELECT count(*) FROM public.layer_cellpros_chunk WHERE revclosed").fetchone() != (0,)
+    # versioning off: DEFAULT's chunk versions stay, as revision 0; the class goes back to rows
+    tgsis.disable_feature_versioning(conn, force=True)
+    conn.commit()
+    assert _layer(conn) == default
+    assert conn.execute(
+        "SELECT count(*) FILTER (WHERE revision <> 0 OR revclosed), count(*) FROM public.layer_cellpros_chunk"
+    ).fetchone() == (0, 2)
+    assert conn.execute("SELECT tgsis.store_class_in_rows('layer')").fetchone() == (len(default),)
+    conn.commit()
+    assert _layer(conn) == default
+
+
+def test_a_check_in_is_refused_when_a_property_changed_since_the_check_out(conn: Conn) -> None:
+    """The check-out's fingerprint covers the property chunks the version sees: a value changed through the face
+    after the check-out (one chunk version, one slot) refuses the check-in; a check-in from a fresh check-out
+    writes the property in the version only."""
+    geoid, mesh = _versioned_layer(conn)
+    tgsis.goto_version(conn, "e1")
+    conn.commit()
+    co = tgsis.checkout(conn, geoid)
+    conn.commit()
+    edited = co.mesh
+    assert isinstance(edited, Surface)
+    porosity = edited.vertex_properties["porosity"].copy()
+    porosity[1100] = -0.0
+    changed = Surface(
+        edited.vertices, edited.cells, vertex_properties={**edited.vertex_properties, "porosity": porosity}
+    )
+    conn.execute("UPDATE public.layer_cellpros SET facies = 3 WHERE _geoid = %s AND _idx = 1500", (geoid,))
+    conn.commit()
+    with pytest.raises(tgsis.CheckoutConflictError):
+        tgsis.checkin(conn, co, changed)
+    conn.rollback()
+    co = tgsis.checkout(conn, geoid)
+    conn.commit()
+    assert isinstance(co.mesh, Surface)
+    porosity = co.mesh.vertex_properties["porosity"].copy()
+    porosity[1100] = -0.0
+    tgsis.checkin(
+        conn,
+        co,
+        Surface(co.mesh.vertices, co.mesh.cells, vertex_properties={**co.mesh.vertex_properties, "porosity": porosity}),
+    )
+    conn.commit()
+    assert _layer(conn, "_idx = 1100")[0][2] == struct.pack(">d", -0.0)
+    tgsis.goto_version(conn, "DEFAULT")
+    conn.commit()
+    assert _layer(conn, "_idx = 1100")[0][2] == struct.pack(">d", float(mesh.vertex_properties["porosity"][1100]))
