@@ -423,3 +423,16 @@ def test_a_check_in_is_refused_when_a_property_changed_since_the_check_out(conn:
     tgsis.goto_version(conn, "DEFAULT")
     conn.commit()
     assert _layer(conn, "_idx = 1100")[0][2] == struct.pack(">d", float(mesh.vertex_properties["porosity"][1100]))
+
+
+def test_tables_named_like_the_markers_beside_a_class_on_rows_change_nothing(conn: Conn) -> None:
+    """Whoever may create tables in a class's schema could make <table>_shape and <table>_chunk beside its
+    versioned view: the storage is still <table>_ver (the face's trigger is the marker, not the names)."""
+    tgsis.create_feature_class(conn, "layer", "SURFACE", cell_properties=[("porosity", "double precision")])
+    tgsis.enable_feature_versioning(conn)
+    conn.execute("CREATE TABLE public.layer_cellpros_shape (a int)")
+    conn.execute("CREATE TABLE public.layer_cellpros_chunk (a int)")
+    assert conn.execute(
+        "SELECT tgsis.storage_table('public', 'layer_cellpros'), tgsis.stored_in_chunks('public', 'layer_cellpros')"
+    ).fetchone() == ("public.layer_cellpros_ver", False)
+    conn.rollback()
