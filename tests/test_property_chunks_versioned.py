@@ -436,3 +436,37 @@ def test_tables_named_like_the_markers_beside_a_class_on_rows_change_nothing(con
         "SELECT tgsis.storage_table('public', 'layer_cellpros'), tgsis.stored_in_chunks('public', 'layer_cellpros')"
     ).fetchone() == ("public.layer_cellpros_ver", False)
     conn.rollback()
+
+
+def test_the_sql_merge_by_region_writes_property_chunks_as_rows(conn: Conn) -> None:
+    """psql's merge by region (tgsis.merge_mesh_by_region, then tgsis.merge_version): both sides' property edits
+    of one feature read from the chunk versions (merge_property_rows) and written into the version through the
+    face; every view equals the twin class on rows."""
+    for name in TWINS:
+        tgsis.create_feature_class(
+            conn, name, "SURFACE", cell_properties=[("porosity", "double precision"), ("facies", "integer")]
+        )
+    tgsis.enable_feature_versioning(conn)
+    geoids = {name: F.insert_feature(conn, name, _surface()) for name in TWINS}
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    conn.execute("SELECT tgsis.store_class_in_chunks('inchunks')")
+    conn.commit()
+    _each(conn, "e1", "UPDATE {table} SET porosity = '-0' WHERE _geoid = %(g)s AND _idx IN (10, 1100)", geoids)
+    _each(conn, "DEFAULT", "UPDATE {table} SET facies = 77 WHERE _geoid = %(g)s AND _idx = 1300", geoids)
+    conn.execute("SELECT FROM tgsis.find_conflicts('e1')")
+    conn.commit()
+    written = {}
+    for name in TWINS:
+        conn.execute("SET TRANSACTION ISOLATION LEVEL READ COMMITTED")
+        row = conn.execute("SELECT tgsis.merge_mesh_by_region('e1', 'merge', %s)", (geoids[name],)).fetchone()
+        conn.commit()
+        assert row is not None and row[0] is not None, name
+        written[name] = row[0]
+    assert written["inchunks"] > 0
+    conn.execute("SELECT tgsis.merge_version('e1')")
+    conn.commit()
+    views = _twin_views(conn)
+    assert views["inchunks"] == views["onrows"]
+    final = {r[1]: r[2:] for r in _twin_rows(conn, "inchunks")}
+    assert final[10][0] == final[1100][0] == struct.pack(">d", -0.0) and final[1300][1] == 77
