@@ -144,7 +144,7 @@ def _edited(conn: Conn, name: str, geoid: int, change: dict[int, float], drop_la
 def test_every_view_equals_the_same_operations_on_rows(conn: Conn, switch: str) -> None:
     """Face writes in versions, a check-in by difference, merges of both sides' property edits (by region, and a
     conflict solved), compress: every version's and revision's rows equal, bit for bit, those of the twin class
-    whose properties stay rows; the chunk versions written are those of the changed chunks only."""
+    whose properties stay rows."""
     for name in TWINS:
         tgsis.create_feature_class(
             conn, name, "SURFACE", cell_properties=[("porosity", "double precision"), ("facies", "integer")]
