@@ -197,6 +197,19 @@ def test_every_view_equals_the_same_operations_on_rows(conn: Conn, switch: str) 
     views = _twin_views(conn)
     assert len(views["onrows"]) >= 8
     assert views["inchunks"] == views["onrows"]
+    # what reports rows reads the decoded chunk versions: the same counts as on rows
+    reports = {}
+    for name in TWINS:
+        table = f"public.{name}_cellpros"
+        diff = conn.execute(
+            "SELECT added, removed, changed FROM tgsis.diff_table(%s::regclass, 'e2', 'DEFAULT')", (table,)
+        ).fetchall()
+        at = conn.execute(
+            sql.SQL("SELECT count(*), sum(facies) FROM tgsis.rows_at(NULL::{}, 'e2')").format(sql.SQL(table))
+        ).fetchone()
+        reports[name] = (diff, at)
+    conn.rollback()
+    assert reports["inchunks"] == reports["onrows"] and reports["onrows"][0] != [], reports
     with tgsis.in_version(conn, "DEFAULT"):
         final = dict((r[1], r[2:]) for r in _twin_rows(conn, "inchunks"))
     assert final[300][0] == struct.pack(">d", 1.0) and final[800][0] == struct.pack(">d", 42.0)
