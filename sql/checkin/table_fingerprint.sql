@@ -8,8 +8,8 @@
 -- every row counted (a row leaving the object changes the count) and a
 -- changed id changes the seeds of the row's other columns.
 -- Read through the table's name: through the versioned view when versioning is on.
--- A model table stored in chunks (tgsis.stored_in_chunks) is hashed per
--- chunk, not per row (docs/storage.md, "What each bulk path does on chunks"):
+-- A model table or a class's property table stored in chunks
+-- (tgsis.stored_in_chunks(schema, table)) is hashed per chunk, not per row (docs/storage.md, "What each bulk path does on chunks"):
 -- each chunk version the session sees hashes as the first 64 bits of the md5
 -- of its chunk number and the send form of every other column (holes, vbase,
 -- the arrays: the doubles bit for bit, so -0.0 differs from 0.0 there where
@@ -103,4 +103,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.table_fingerprint(text, text, text, text, bigint[]) IS
-    'row count and xor of per-row hashes (columns hashed with seeds from the row id and column position) of the rows of a table whose keyfield is one of keys, as the session sees them; for a model table stored in chunks, the count and xor of per-chunk hashes (md5 of the chunk number and the chunk''s send forms) of the chunk versions the session sees';
+    'row count and xor of per-row hashes (columns hashed with seeds from the row id and column position) of the rows of a table whose keyfield is one of keys, as the session sees them; for a table stored in chunks (a model table, a class''s property table), the count and xor of per-chunk hashes (md5 of the chunk number and the chunk''s send forms) of the chunk versions the session sees';

@@ -6,7 +6,10 @@
 -- the working revision appended to lastrevs, and objects locked by another
 -- version are refused (TG303). With p_idfield and p_ids only the
 -- rows whose id is one of p_ids go: the removed vertices, simplices or
--- property rows of an edited mesh (tgsis.save_feature). Returns rows affected.
+-- property rows of an edited mesh (tgsis.save_feature). A class's property
+-- table stored in chunks: some rows of an object (and whole objects while
+-- unversioned) through its face, which rewrites their chunks in the working
+-- revision with the caller's rights. Returns rows affected.
 CREATE FUNCTION tgsis.delete_object_rows(p_schema text, p_table text, p_keyfield text, p_keys bigint[],
                                          p_idfield text DEFAULT NULL, p_ids bigint[] DEFAULT NULL)
 RETURNS bigint

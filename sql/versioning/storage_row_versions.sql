@@ -5,7 +5,7 @@
 -- tgsis.conflict_discards) read one relation of rows with the row table's
 -- columns and the versioning columns: <table>_ver when the rows are stored
 -- as rows (tgsis.storage_table), the decoded chunk versions when a model
--- table is stored in chunks (tgsis.stored_in_chunks: a row per present slot
+-- table or a class's property table is stored in chunks (tgsis.stored_in_chunks: a row per present slot
 -- of every chunk version, with its chunk version's revision, lastrevs and
 -- revclosed, so a visibility test on them reads as on rows). A filter on
 -- geoid and on the versioning columns reaches the chunk table, one on a
@@ -49,7 +49,7 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.storage_row_versions(text, text, bigint[]) IS
-    'SQL of the relation of a table''s stored row versions (the row table''s columns, then revision, lastrevs, revclosed): when the model table is stored in chunks (tgsis.stored_in_chunks), its decoded chunk versions, only the chunks holding p_ids when given (else the view tgsis.<table>_chunk_rows); else tgsis.storage_table''s relation (<table>_ver, or the table itself)';
+    'SQL of the relation of a table''s stored row versions (the row table''s columns, then revision, lastrevs, revclosed): when the model table or a class''s property table is stored in chunks (tgsis.stored_in_chunks(schema, table)), its decoded chunk versions, only the chunks holding p_ids when given (else the view <table>_chunk_rows); else tgsis.storage_table''s relation (<table>_ver, or the table itself)';
 
 -- internal to the merges' readers, not executable by PUBLIC (tests/test_function_grants.py); tgsis.mesh_merge_work runs it as the calling tgsis role
 REVOKE ALL ON FUNCTION tgsis.storage_row_versions(text, text, bigint[]) FROM PUBLIC;
