@@ -429,9 +429,6 @@ def test_what_is_not_built_is_refused_by_name_and_changes_nothing(conn: Conn) ->
         None,
         "",
     )
-    state, message = sqlstate(conn, "SELECT tgsis.enable_feature_versioning()")
-    assert state == "TG300" and "stored in chunks" in message
-    assert conn.execute("SELECT count(*) FROM tgsis.versioned_tables").fetchone() == (0,)
     assert _layer_rows(conn) == before
     assert sqlstate(conn, "SELECT tgsis.store_class_in_chunks('nothere')")[0] == "TG200"
     tgsis.create_feature_class(conn, "series", "SURFACE", time_model="INSTANTS", cell_properties=[("t", "real")])
@@ -451,13 +448,13 @@ def test_what_is_not_built_is_refused_by_name_and_changes_nothing(conn: Conn) ->
     assert geoid > 0
 
 
-def test_a_versioned_class_is_refused_by_name(conn: Conn) -> None:
+def test_a_class_registered_without_versioning_switches_beside_versioned_ones(conn: Conn) -> None:
     tgsis.create_feature_class(conn, "plain", "SURFACE", cell_properties=[("p", "real")], versioned=False)
     tgsis.enable_feature_versioning(conn)
     tgsis.create_feature_class(conn, "kept", "SURFACE", cell_properties=[("p", "real")])
     conn.commit()
-    state, message = sqlstate(conn, "SELECT tgsis.store_class_in_chunks('kept')")
-    assert state == "TG300" and "versioned" in message
+    # a versioned class switches too (tests/test_property_chunks_versioned.py)
+    assert conn.execute("SELECT tgsis.store_class_in_chunks('kept')").fetchone() == (0,)
     # a class registered without versioning switches, and is written in DEFAULT as its rows were
     assert conn.execute("SELECT tgsis.store_class_in_chunks('plain')").fetchone() == (0,)
     conn.execute("INSERT INTO public.plain_cellpros VALUES (1, 0, 2.5)")

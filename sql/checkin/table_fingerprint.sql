@@ -8,8 +8,8 @@
 -- every row counted (a row leaving the object changes the count) and a
 -- changed id changes the seeds of the row's other columns.
 -- Read through the table's name: through the versioned view when versioning is on.
--- A model table stored in chunks (tgsis.stored_in_chunks) is hashed per
--- chunk, not per row (docs/storage.md, "What each bulk path does on chunks"):
+-- A model table or a class's property table stored in chunks
+-- (tgsis.stored_in_chunks(schema, table)) is hashed per chunk, not per row (docs/storage.md, "What each bulk path does on chunks"):
 -- each chunk version the session sees hashes as the first 64 bits of the md5
 -- of its chunk number and the send form of every other column (holes, vbase,
 -- the arrays: the doubles bit for bit, so -0.0 differs from 0.0 there where
@@ -46,20 +46,20 @@ BEGIN
     IF to_regclass(format('%I.%I', p_schema, p_table)) IS NULL THEN
         RAISE EXCEPTION 'table %.% does not exist', quote_ident(p_schema), quote_ident(p_table) USING ERRCODE = 'TG200';
     END IF;
-    IF p_schema = 'tgsis' AND tgsis.stored_in_chunks(p_table) THEN
+    IF tgsis.stored_in_chunks(p_schema, p_table) THEN
         -- the chunk table's own columns, after its key (NULL: a byte an array's send form never starts with)
         SELECT string_agg(format('coalesce(%s(r.%I), ''\x01''::bytea)',
                                  CASE WHEN a.attndims > 0 OR t.typcategory = 'A' THEN 'array_send' ELSE 'int8send' END,
                                  a.attname), ' || ' ORDER BY a.attnum)
           INTO v_hash
           FROM pg_attribute a JOIN pg_type t ON t.oid = a.atttypid
-         WHERE a.attrelid = format('tgsis.%I', p_table || '_chunk')::regclass AND a.attnum > 0 AND NOT a.attisdropped
+         WHERE a.attrelid = format('%I.%I', p_schema, p_table || '_chunk')::regclass AND a.attnum > 0 AND NOT a.attisdropped
            AND a.attname NOT IN (p_keyfield, 'chunk', 'revision', 'lastrevs', 'revclosed');
         EXECUTE format('SELECT count(*) || '':'' || coalesce(bit_xor((''x'' || left(md5(int8send(r.chunk) || %s), 16))::bit(64)::bigint), 0)
-                          FROM tgsis.%I r
+                          FROM %I.%I r
                          WHERE r.%I = ANY ($1)
                            AND ($2 IS NULL OR ((r.revision = ANY ($2)) IS TRUE AND (NOT r.revclosed OR NOT (r.lastrevs && $2))))',
-                       v_hash, p_table || '_chunk', p_keyfield)
+                       v_hash, p_schema, p_table || '_chunk', p_keyfield)
            INTO v_result
           USING p_keys, CASE WHEN EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = p_schema AND t.tablename = p_table)
                              THEN tgsis.get_revisions() END;
@@ -103,4 +103,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.table_fingerprint(text, text, text, text, bigint[]) IS
-    'row count and xor of per-row hashes (columns hashed with seeds from the row id and column position) of the rows of a table whose keyfield is one of keys, as the session sees them; for a model table stored in chunks, the count and xor of per-chunk hashes (md5 of the chunk number and the chunk''s send forms) of the chunk versions the session sees';
+    'row count and xor of per-row hashes (columns hashed with seeds from the row id and column position) of the rows of a table whose keyfield is one of keys, as the session sees them; for a table stored in chunks (a model table, a class''s property table), the count and xor of per-chunk hashes (md5 of the chunk number and the chunk''s send forms) of the chunk versions the session sees';

@@ -52,7 +52,17 @@ BEGIN
     END IF;
     EXECUTE format('DROP VIEW %I.%I', v_class.schemaname, v_class.viewname);
     FOR v_table IN SELECT t.tablename FROM tgsis.class_tables t WHERE t.classname = p_name ORDER BY t.position DESC LOOP
-        IF EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = v_class.schemaname AND tablename = v_table) THEN
+        IF tgsis.stored_in_chunks(v_class.schemaname, v_table) THEN
+            -- stored in chunks (tgsis.store_class_in_chunks), versioned or not: the face, the decoded view, the
+            -- chunks, the row definition, and a versioned table's registration
+            EXECUTE format('DROP VIEW %I.%I', v_class.schemaname, v_table);
+            EXECUTE format('DROP VIEW %I.%I', v_class.schemaname, v_table || '_chunk_rows');
+            EXECUTE format('DROP TABLE %I.%I', v_class.schemaname, v_table || '_chunk');
+            EXECUTE format('DROP TABLE %I.%I', v_class.schemaname, v_table || '_shape');
+            DELETE FROM tgsis.versioned_tables WHERE schemaname = v_class.schemaname AND tablename = v_table;
+            DELETE FROM tgsis.revision_objects WHERE schemaname = v_class.schemaname AND tablename = v_table;
+            DELETE FROM tgsis.versioning_dropped WHERE schemaname = v_class.schemaname AND tablename = v_table;
+        ELSIF EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = v_class.schemaname AND tablename = v_table) THEN
             EXECUTE format('DROP VIEW %I.%I', v_class.schemaname, v_table);
             EXECUTE format('DROP FUNCTION %I.%I()', v_class.schemaname, v_table || '_ver_write');
             EXECUTE format('DROP TABLE %I.%I', v_class.schemaname, v_table || '_ver_queue');
@@ -62,14 +72,6 @@ BEGIN
             DELETE FROM tgsis.versioned_tables WHERE schemaname = v_class.schemaname AND tablename = v_table;
             DELETE FROM tgsis.revision_objects WHERE schemaname = v_class.schemaname AND tablename = v_table;
             DELETE FROM tgsis.versioning_dropped WHERE schemaname = v_class.schemaname AND tablename = v_table;
-        ELSIF to_regclass(format('%I.%I', v_class.schemaname, v_table || '_shape')) IS NOT NULL
-              AND to_regclass(format('%I.%I', v_class.schemaname, v_table || '_chunk')) IS NOT NULL
-           AND (SELECT c.relkind FROM pg_class c WHERE c.oid = to_regclass(format('%I.%I', v_class.schemaname, v_table))) = 'v' THEN
-            -- stored in chunks (tgsis.store_class_in_chunks): the face, the decoded view, the chunks, the row definition
-            EXECUTE format('DROP VIEW %I.%I', v_class.schemaname, v_table);
-            EXECUTE format('DROP VIEW %I.%I', v_class.schemaname, v_table || '_chunk_rows');
-            EXECUTE format('DROP TABLE %I.%I', v_class.schemaname, v_table || '_chunk');
-            EXECUTE format('DROP TABLE %I.%I', v_class.schemaname, v_table || '_shape');
         ELSE
             EXECUTE format('DROP TABLE %I.%I', v_class.schemaname, v_table);
         END IF;

@@ -6,13 +6,19 @@
 -- go; the row definition is kept without rows as <class>_cellpros_shape.
 -- Reads, INSERT, UPDATE and DELETE through the face work as on the table
 -- (tgsis.chunk_face_write, with the class table's grants). Nothing default
--- changes: only a tgsis_admin calling this switches a class. Built so far for
--- classes whose tables are not versioned (p_versioned => false, or feature
--- versioning off): a versioned class is refused by name (TG300), and so is
--- tgsis.enable_feature_versioning while a class's properties are in chunks
--- (tgsis.version_class_tables); add_property, rename_property and
--- drop_property are refused by name (TG100) while they are; drop_feature_class
--- drops the chunk table with the class. tgsis.store_class_in_rows goes back.
+-- changes: only a tgsis_admin calling this switches a class. A versioned
+-- class (its tables registered in tgsis.versioned_tables) switches with its
+-- history: every chunk version written from the row versions of <table>_ver
+-- and verified against every version's and revision's set, the versioned
+-- view and its <table>_ver, queue, write function and runner dropped, the
+-- registration kept (tgsis.storage_table then names the chunk table, which
+-- is guarded as <table>_ver was: tgsis.guard_chunk_storage), the conflicts'
+-- marks renewed (solved conflicts stay solved), as tgsis.store_in_chunks does
+-- for a model table. tgsis.enable_feature_versioning versions a class whose
+-- properties are in chunks (tgsis.version_class_tables). add_property,
+-- rename_property and drop_property are refused by name (TG100) while they
+-- are; drop_feature_class drops the chunk table with the class.
+-- tgsis.store_class_in_rows goes back (not for a versioned class: TG300).
 -- Vector properties have no chunk form yet (TG100, tgsis.chunk_columns).
 -- A table with row-level security, policies, a user's trigger, or a view or
 -- foreign key over it is refused by name (TG202): a view can carry none of
@@ -35,6 +41,10 @@ DECLARE
     v_pkey  text;
     v_keys  text;
     v_n     bigint;
+    v_versioned tgsis.versioned_tables;
+    v_storage   regclass;
+    v_marks     jsonb;
+    v_proc      text;
 BEGIN
     v_class := tgsis.class_for_change(p_class, 'store in chunks the');  -- TG002 (not a tgsis_admin), TG200
     v_name := format('%I.%I', v_class.schemaname, v_class.cellprotable);
@@ -48,12 +58,8 @@ BEGIN
         RAISE EXCEPTION 'the properties of feature class % are stored in chunks already', p_class
             USING ERRCODE = 'TG201', DETAIL = format('Their chunk table is %s.', tgsis.chunk_relation(v_name, '_chunk'));
     END IF;
-    IF EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = v_class.schemaname AND t.tablename = v_class.cellprotable) THEN
-        RAISE EXCEPTION 'the properties of feature class % cannot be stored in chunks yet: the class is versioned', p_class
-            USING ERRCODE = 'TG300',
-                  DETAIL = 'Property chunks are built for classes whose tables are not versioned (registered with p_versioned => false, '
-                           'or while feature versioning is off); the merges and the bulk paths of versioned classes read rows.';
-    END IF;
+    SELECT * INTO v_versioned FROM tgsis.versioned_tables t
+     WHERE t.schemaname = v_class.schemaname AND t.tablename = v_class.cellprotable;
     v_shape := v_class.cellprotable || '_shape';
     IF to_regclass(format('%I.%I', v_class.schemaname, v_shape)) IS NOT NULL
        OR to_regclass(format('%I.%I', v_class.schemaname, v_class.cellprotable || '_face')) IS NOT NULL
@@ -63,14 +69,24 @@ BEGIN
             USING ERRCODE = 'TG201', DETAIL = 'Storing the properties in chunks needs these names for the row definition, the face and the chunk view.';
     END IF;
     v_table := format('%I.%I', v_class.schemaname, v_class.cellprotable)::regclass;
-    EXECUTE format('LOCK TABLE %s IN SHARE ROW EXCLUSIVE MODE', v_table);
+    v_storage := tgsis.storage_table(v_class.schemaname, v_class.cellprotable)::regclass;  -- the table, or its <table>_ver
+    EXECUTE format('LOCK TABLE %s IN SHARE ROW EXCLUSIVE MODE', v_storage);
     -- what the table carries that a view cannot, or that its drop would take along: row-level security and its
     -- policies (the rows a role may see), a user's trigger, a view or foreign key over it; dropped with the rows,
     -- they would be lost without an error, so the switch is refused by name
     v_users := concat_ws(', ',
         CASE WHEN (SELECT c.relrowsecurity FROM pg_class c WHERE c.oid = v_table) THEN 'row-level security' END,
         (SELECT string_agg(format('policy %I', p.polname), ', ' ORDER BY p.polname) FROM pg_policy p WHERE p.polrelid = v_table),
-        tgsis.relation_users(v_table, '{}', '{}'));
+        CASE WHEN v_versioned.tablename IS NULL THEN tgsis.relation_users(v_table, '{}', '{}')
+             -- versioned: the view and its <table>_ver, less what versioning made (the view's own rule and
+             -- triggers, the storage's triggers)
+             ELSE concat_ws(', ',
+                 CASE WHEN (SELECT c.relrowsecurity FROM pg_class c WHERE c.oid = v_storage) THEN format('row-level security on %s', v_storage) END,
+                 (SELECT string_agg(format('policy %I on %s', p.polname, v_storage), ', ' ORDER BY p.polname)
+                    FROM pg_policy p WHERE p.polrelid = v_storage),
+                 tgsis.relation_users(v_table, ARRAY[v_table], '{tgsis_versioning,tgsis_versioning_flush,tgsis_versioning_rights}'),
+                 tgsis.relation_users(v_storage, ARRAY[v_table], '{tgsis_storage_write,tgsis_storage_rows,tgsis_storage_changes}'))
+        END);
     IF v_users <> '' THEN
         RAISE EXCEPTION 'the properties of feature class % cannot be stored in chunks: % carries what its face could not',
                         p_class, v_table
@@ -78,23 +94,40 @@ BEGIN
                   HINT = 'drop them (and the row-level security), store the class in chunks, then create what a view allows again';
     END IF;
 
-    -- 1. the chunks, verified against the rows (TG100 for a property the layout has no form for)
+    -- the conflicts' marks fingerprint the stored versions, which the switch changes without changing what any
+    -- version sees: read before, renewed after (tgsis.renew_conflict_marks), solved conflicts stay solved
+    IF v_versioned.tablename IS NOT NULL THEN
+        v_marks := tgsis.conflict_marks();
+    END IF;
+
+    -- 1. the chunks, verified against the rows (every version's and revision's set when versioned; TG100 for a
+    -- property the layout has no form for)
     PERFORM tgsis.create_chunk_table(v_name);
     PERFORM tgsis.create_chunk_view(v_name);
     v_n := tgsis.rows_to_chunks(v_name);
 
-    -- 2. the row definition, without rows
-    SELECT con.conname, string_agg(quote_ident(a.attname), ', ' ORDER BY k.ord) INTO v_pkey, v_keys
-      FROM pg_constraint con
-     CROSS JOIN LATERAL unnest(con.conkey) WITH ORDINALITY AS k(attnum, ord)
-      JOIN pg_attribute a ON a.attrelid = con.conrelid AND a.attnum = k.attnum
-     WHERE con.conrelid = v_table AND con.contype = 'p'
-     GROUP BY con.conname;
-    EXECUTE format('CREATE TABLE %I.%I (LIKE %s INCLUDING CONSTRAINTS INCLUDING COMMENTS)', v_class.schemaname, v_shape, v_table);
+    -- 2. the row definition, without rows (of a versioned table: its storage without the versioning columns, the
+    -- key as registered)
+    IF v_versioned.tablename IS NOT NULL THEN
+        v_pkey := v_versioned.pkeyname;
+        v_keys := (SELECT string_agg(quote_ident(k), ', ' ORDER BY o) FROM unnest(v_versioned.keycolumns) WITH ORDINALITY AS u(k, o));
+    ELSE
+        SELECT con.conname, string_agg(quote_ident(a.attname), ', ' ORDER BY k.ord) INTO v_pkey, v_keys
+          FROM pg_constraint con
+         CROSS JOIN LATERAL unnest(con.conkey) WITH ORDINALITY AS k(attnum, ord)
+          JOIN pg_attribute a ON a.attrelid = con.conrelid AND a.attnum = k.attnum
+         WHERE con.conrelid = v_table AND con.contype = 'p'
+         GROUP BY con.conname;
+    END IF;
+    EXECUTE format('CREATE TABLE %I.%I (LIKE %s INCLUDING CONSTRAINTS INCLUDING COMMENTS)', v_class.schemaname, v_shape, v_storage);
+    IF v_versioned.tablename IS NOT NULL THEN
+        EXECUTE format('ALTER TABLE %I.%I DROP COLUMN revision, DROP COLUMN lastrevs, DROP COLUMN revclosed', v_class.schemaname, v_shape);
+    END IF;
     EXECUTE format('ALTER TABLE %I.%I ADD CONSTRAINT %I PRIMARY KEY (%s)', v_class.schemaname, v_shape, v_shape || '_pkey', v_keys);
     EXECUTE format('ALTER TABLE %I.%I ADD CONSTRAINT %I CHECK (false)', v_class.schemaname, v_shape,
                    v_class.cellprotable || '_shape_holds_no_rows');
-    EXECUTE format('COMMENT ON TABLE %I.%I IS %L', v_class.schemaname, v_shape, obj_description(v_table, 'pg_class'));
+    EXECUTE format('COMMENT ON TABLE %I.%I IS %L', v_class.schemaname, v_shape,
+                   coalesce(v_versioned.tablecomment, obj_description(v_table, 'pg_class')));
 
     -- 3. the face takes the name (with the table's grants); the rows go
     PERFORM tgsis.create_chunk_face(v_name, v_class.cellprotable || '_face');
@@ -102,8 +135,23 @@ BEGIN
                    format('the row definition of %s (columns, key %s, constraints, comments), kept without rows since its properties '
                           'are stored in chunks (%s behind the face %s: tgsis.store_class_in_chunks)',
                           v_name, v_pkey, tgsis.chunk_relation(v_name, '_chunk'), v_name));
-    EXECUTE format('DROP TABLE %s', v_table);
+    IF v_versioned.tablename IS NOT NULL THEN
+        -- the versioned view and what serves it go; the registration stays (the chunk table is its storage)
+        EXECUTE format('DROP VIEW %s', v_table);
+        EXECUTE format('DROP FUNCTION %I.%I()', v_class.schemaname, v_class.cellprotable || '_ver_write');
+        EXECUTE format('DROP TABLE %I.%I', v_class.schemaname, v_class.cellprotable || '_ver_queue');
+        FOR v_proc IN SELECT p.oid::regprocedure::text FROM pg_proc p
+                       WHERE p.pronamespace = v_class.schemaname::regnamespace AND p.proname = v_class.cellprotable || '_ver_run' LOOP
+            EXECUTE format('DROP FUNCTION %s', v_proc);
+        END LOOP;
+    END IF;
+    EXECUTE format('DROP TABLE %s', v_storage);
     EXECUTE format('ALTER VIEW %I.%I RENAME TO %I', v_class.schemaname, v_class.cellprotable || '_face', v_class.cellprotable);
+    IF v_versioned.tablename IS NOT NULL THEN
+        PERFORM tgsis.guard_chunk_storage(v_name);  -- the rights, labels and notes <table>_ver's triggers kept
+        EXECUTE format('ANALYZE %s', tgsis.chunk_relation(v_name, '_chunk'));
+        PERFORM tgsis.renew_conflict_marks(v_marks);
+    END IF;
     RETURN v_n;
 END
 $$;
@@ -112,4 +160,4 @@ REVOKE ALL ON FUNCTION tgsis.store_class_in_chunks(text) FROM PUBLIC;
 GRANT EXECUTE ON FUNCTION tgsis.store_class_in_chunks(text) TO tgsis_admin;
 
 COMMENT ON FUNCTION tgsis.store_class_in_chunks(text) IS
-    'store the property table <schema>.<class>_cellpros of a STATIC class not versioned in chunks (opt-in, tgsis_admin members): <class>_cellpros_chunk filled from the rows and verified (tgsis.rows_to_chunks), the row definition kept as <class>_cellpros_shape, <class>_cellpros made the face over the chunks (today''s columns and grants; INSERT, UPDATE, DELETE through it); TG300 for a versioned class, TG100 for a temporal one or a vector property, TG201 when stored in chunks already, TG202 when the table has row-level security, policies, a user''s trigger or a view or foreign key over it; returns the chunk versions written; tgsis.store_class_in_rows goes back';
+    'store the property table <schema>.<class>_cellpros of a STATIC class in chunks (opt-in, tgsis_admin members), versioned or not: <class>_cellpros_chunk filled from the rows (every row version when versioned) and verified (tgsis.rows_to_chunks), the row definition kept as <class>_cellpros_shape, <class>_cellpros made the face over the chunks (today''s columns and grants; INSERT, UPDATE, DELETE through it), a versioned class keeping its registration with the chunk table as its storage (guarded as <table>_ver was); TG100 for a temporal one or a vector property, TG201 when stored in chunks already, TG202 when the table has row-level security, policies, a user''s trigger or a view or foreign key over it; returns the chunk versions written; tgsis.store_class_in_rows goes back';

@@ -5,7 +5,8 @@
 -- comments) with the face's grants, filled from every chunk version and
 -- verified value for value (tgsis.chunks_to_rows); then the chunk table, its
 -- view and the shape go. A user's view over the face blocks it (PostgreSQL's
--- 2BP01 names the view; nothing changed). tgsis_admin members; SECURITY
+-- 2BP01 names the view; nothing changed). A versioned class is refused by
+-- name (TG300, nothing changed): its way back is not built. tgsis_admin members; SECURITY
 -- DEFINER as tgsis's owner owns the class's tables. Returns the rows written.
 CREATE FUNCTION tgsis.store_class_in_rows(p_class text)
 RETURNS bigint
@@ -28,6 +29,14 @@ BEGIN
     IF v_shape IS NULL OR to_regclass(tgsis.chunk_relation(v_name, '_chunk')) IS NULL THEN
         RAISE EXCEPTION 'the properties of feature class % are not stored in chunks', coalesce(quote_literal(p_class), 'NULL')
             USING ERRCODE = 'TG200', DETAIL = 'Only what tgsis.store_class_in_chunks stored goes back to rows.';
+    END IF;
+    IF EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = v_class.schemaname AND t.tablename = v_class.cellprotable) THEN
+        RAISE EXCEPTION 'the properties of feature class % cannot be stored as rows again while the class is versioned', p_class
+            USING ERRCODE = 'TG300',
+                  DETAIL = format('%s holds the chunk versions of every version; the way back of a versioned class (its '
+                                  '<table>_ver and versioned view made from them) is not built. Nothing was changed.',
+                                  tgsis.chunk_relation(v_name, '_chunk')),
+                  HINT = 'keep the properties in chunks, or store them as rows before versioning is enabled';
     END IF;
     v_face := v_name::regclass;
     EXECUTE format('LOCK TABLE %s IN SHARE ROW EXCLUSIVE MODE', tgsis.chunk_relation(v_name, '_chunk'));
@@ -56,4 +65,4 @@ REVOKE ALL ON FUNCTION tgsis.store_class_in_rows(text) FROM PUBLIC;
 GRANT EXECUTE ON FUNCTION tgsis.store_class_in_rows(text) TO tgsis_admin;
 
 COMMENT ON FUNCTION tgsis.store_class_in_rows(text) IS
-    'store a class''s property table as rows again after tgsis.store_class_in_chunks (tgsis_admin members): the table made from its kept row definition with the face''s grants, filled from the chunks and verified (tgsis.chunks_to_rows), the face, chunk view, chunk table and shape dropped; TG200 when not stored in chunks; returns the rows written';
+    'store a class''s property table as rows again after tgsis.store_class_in_chunks (tgsis_admin members): the table made from its kept row definition with the face''s grants, filled from the chunks and verified (tgsis.chunks_to_rows), the face, chunk view, chunk table and shape dropped; TG200 when not stored in chunks, TG300 for a versioned class; returns the rows written';

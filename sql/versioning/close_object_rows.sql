@@ -35,7 +35,7 @@ BEGIN
     PERFORM tgsis.require_read_committed('a set-based delete of versioned objects');
     -- a chunk holds 1024 ids of an object: some of its rows go by rewriting it, which is the chunk writer's
     -- work (tgsis.write_chunk_rows, a later layer); here whole objects only, never a chunk dropped for a row
-    IF p_idfield IS NOT NULL AND p_schema = 'tgsis' AND tgsis.stored_in_chunks(p_table) THEN
+    IF p_idfield IS NOT NULL AND tgsis.stored_in_chunks(p_schema, p_table) THEN
         RAISE EXCEPTION 'tgsis.% is stored in chunks: some rows of an object are deleted by rewriting its chunks', quote_ident(p_table)
             USING ERRCODE = 'TG100',
                   DETAIL = format('Rows %s = any of %s of objects %s were to be deleted; tgsis.close_object_rows deletes whole objects '

@@ -48,7 +48,7 @@ AS $$
 DECLARE
     v_rel regclass;
 BEGIN
-    IF p_schema = 'tgsis' AND tgsis.stored_in_chunks(p_table) THEN
+    IF tgsis.stored_in_chunks(p_schema, p_table) THEN
         RETURN;
     END IF;
     v_rel := format('%I.%I', p_schema, p_table || '_ver')::regclass;

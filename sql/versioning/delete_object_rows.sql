@@ -6,7 +6,10 @@
 -- the working revision appended to lastrevs, and objects locked by another
 -- version are refused (TG303). With p_idfield and p_ids only the
 -- rows whose id is one of p_ids go: the removed vertices, simplices or
--- property rows of an edited mesh (tgsis.save_feature). Returns rows affected.
+-- property rows of an edited mesh (tgsis.save_feature). A class's property
+-- table stored in chunks: some rows of an object (and whole objects while
+-- unversioned) through its face, which rewrites their chunks in the working
+-- revision with the caller's rights. Returns rows affected.
 CREATE FUNCTION tgsis.delete_object_rows(p_schema text, p_table text, p_keyfield text, p_keys bigint[],
                                          p_idfield text DEFAULT NULL, p_ids bigint[] DEFAULT NULL)
 RETURNS bigint
@@ -31,10 +34,22 @@ BEGIN
     END IF;
     v_where := format('%I = ANY ($1)', p_keyfield)
                || CASE WHEN p_idfield IS NOT NULL THEN format(' AND %I = ANY ($4)', p_idfield) ELSE '' END;
+    -- a feature class's property table stored in chunks (tgsis.store_class_in_chunks): some rows of an object go
+    -- through its face, whose trigger rewrites their chunks in the working revision (tgsis.chunk_face_write, the
+    -- caller's rights); so do whole objects while it is not versioned (its chunk table is written through the face
+    -- alone), while versioned they are closed as chunk versions (tgsis.close_object_rows)
+    IF p_schema <> 'tgsis' AND tgsis.stored_in_chunks(p_schema, p_table)
+       AND (p_idfield IS NOT NULL
+            OR NOT EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = p_schema AND tablename = p_table)) THEN
+        EXECUTE format('DELETE FROM %I.%I WHERE %s', p_schema, p_table, v_where)
+          USING p_keys, NULL::integer, NULL::integer[], p_ids;
+        GET DIAGNOSTICS v_deleted = ROW_COUNT;
+        RETURN v_deleted;
+    END IF;
     IF NOT EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = p_schema AND tablename = p_table) THEN
         -- stored in chunks: whole objects' chunks go at once (every chunk version is revision 0, the one state);
         -- never a whole chunk for some of its rows (tgsis.close_object_rows refuses that as for versioned storage)
-        IF p_schema = 'tgsis' AND tgsis.stored_in_chunks(p_table) THEN
+        IF tgsis.stored_in_chunks(p_schema, p_table) THEN
             IF p_idfield IS NOT NULL THEN
                 RETURN tgsis.close_object_rows(p_schema, p_table, p_keyfield, p_keys, p_idfield, p_ids);  -- TG100
             END IF;

@@ -47,11 +47,12 @@ BEGIN
         END IF;
     END IF;
 
-    IF v_t.schemaname = 'tgsis' AND tgsis.stored_in_chunks(v_t.tablename) THEN
-        -- the rights the chunk table did not keep while versioned come back from the face (tgsis.enable_feature_versioning)
+    IF tgsis.stored_in_chunks(v_t.schemaname, v_t.tablename) THEN
+        -- the rights the chunk table did not keep while versioned come back from the face (tgsis.enable_feature_versioning);
+        -- a class's property chunks are written through the face alone, versioned or not (SELECT only: tgsis.create_chunk_table)
         FOR v_acl IN
             SELECT a.privilege_type, a.grantee FROM pg_class c, aclexplode(c.relacl) AS a
-             WHERE c.oid = v_view AND a.grantee <> c.relowner
+             WHERE c.oid = v_view AND a.grantee <> c.relowner AND v_t.schemaname = 'tgsis'
                AND a.privilege_type IN ('UPDATE', 'DELETE', 'TRUNCATE', 'REFERENCES', 'TRIGGER')
         LOOP
             EXECUTE format('GRANT %s ON %s TO %s', v_acl.privilege_type, v_storage,

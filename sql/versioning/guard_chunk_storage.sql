@@ -15,6 +15,10 @@
 -- owners (the face's writer, tgsis.write_chunk_rows, merges). Called by
 -- tgsis.enable_feature_versioning for a table stored in chunks, and by the
 -- storage switch of a versioned table; tgsis.disable_versioning_rel undoes it.
+-- A feature class's property table stored in chunks is named as the chunk
+-- layer names it, schema-qualified ('public.rock_cellpros': its chunk table
+-- is <schema>.<table>_chunk; tgsis.version_class_tables, the switch of a
+-- versioned class, tgsis.store_class_in_chunks); a model table bare ('vrtx').
 -- Internal: tgsis's owner, who owns the storage.
 CREATE FUNCTION tgsis.guard_chunk_storage(p_table text)
 RETURNS void
@@ -28,13 +32,14 @@ DECLARE
     v_owner   text;
     v_skip    text;
     v_grantee oid;
+    v_name    text[] := CASE WHEN strpos(p_table, '.') > 0 THEN parse_ident(p_table) ELSE ARRAY['tgsis', p_table] END;
 BEGIN
-    SELECT * INTO v_t FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table;
-    IF NOT FOUND OR NOT tgsis.stored_in_chunks(p_table) THEN
-        RAISE EXCEPTION 'tgsis.% is not a versioned table stored in chunks', quote_ident(p_table)
+    SELECT * INTO v_t FROM tgsis.versioned_tables t WHERE t.schemaname = v_name[1] AND t.tablename = v_name[2];
+    IF NOT FOUND OR cardinality(v_name) <> 2 OR NOT tgsis.stored_in_chunks(v_name[1], v_name[2]) THEN
+        RAISE EXCEPTION '% is not a versioned table stored in chunks', p_table
             USING ERRCODE = 'TG200';
     END IF;
-    v_chunk := tgsis.storage_table('tgsis', p_table)::regclass;
+    v_chunk := tgsis.storage_table(v_t.schemaname, v_t.tablename)::regclass;
     v_owner := (SELECT pg_get_userbyid(c.relowner) FROM pg_class c WHERE c.oid = v_chunk);
     FOR v_grantee IN
         SELECT DISTINCT a.grantee FROM pg_class c, aclexplode(c.relacl) AS a
@@ -55,15 +60,15 @@ BEGIN
                    'FOR EACH STATEMENT WHEN (%s) EXECUTE FUNCTION tgsis.storage_write_check()', v_chunk, v_skip);
     EXECUTE format('CREATE TRIGGER tgsis_storage_rows AFTER INSERT ON %s REFERENCING NEW TABLE AS tgsis_new_rows '
                    'FOR EACH STATEMENT WHEN (%s) EXECUTE FUNCTION tgsis.storage_rows_check(%L, %L, %L)',
-                   v_chunk, v_skip, v_t.objectclass, v_t.objectkeyfield, p_table);
+                   v_chunk, v_skip, v_t.objectclass, v_t.objectkeyfield, v_t.tablename);
     EXECUTE format('CREATE TRIGGER tgsis_storage_changes AFTER INSERT ON %s REFERENCING NEW TABLE AS tgsis_new_rows '
                    'FOR EACH STATEMENT WHEN (pg_catalog.pg_trigger_depth() = 0 OR CURRENT_USER <> %L::name) '
                    'EXECUTE FUNCTION tgsis.record_inserted_objects(%L, %L)',
-                   v_chunk, v_owner, v_t.objectkeyfield, p_table);
+                   v_chunk, v_owner, v_t.objectkeyfield, v_t.tablename);
 END
 $$;
 
 REVOKE ALL ON FUNCTION tgsis.guard_chunk_storage(text) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.guard_chunk_storage(text) IS
-    'guard tgsis.<table>_chunk of a versioned model table stored in chunks as tgsis.enable_versioning_rel guards <table>_ver: other roles lose UPDATE, DELETE, TRUNCATE, REFERENCES, TRIGGER on it; direct writers need the write right and may add only open chunk versions of their working revision (tgsis.storage_write_check, storage_rows_check), noted in tgsis.revision_objects (record_inserted_objects)';
+    'guard the chunk table (tgsis.<table>_chunk, or <schema>.<table>_chunk of a class''s property table named schema-qualified) of a versioned table stored in chunks as tgsis.enable_versioning_rel guards <table>_ver: other roles lose UPDATE, DELETE, TRUNCATE, REFERENCES, TRIGGER on it; direct writers need the write right and may add only open chunk versions of their working revision (tgsis.storage_write_check, storage_rows_check), noted in tgsis.revision_objects (record_inserted_objects)';

@@ -354,10 +354,10 @@ BEGIN
                 'SELECT ARRAY[f.id::text, %s]
                    FROM (SELECT $5[g.i] AS id, $5[c.n + g.i] AS sid, $5[2 * c.n + g.i] AS src
                            FROM (SELECT cardinality($5) / 3 AS n) AS c, generate_series(1, cardinality($5) / 3) AS g(i)) AS f
-                   JOIN %I.%I s ON s._geoid = $1[1]::bigint AND s._idx = f.sid
+                   JOIN %s s ON s._geoid = $1[1]::bigint AND s._idx = f.sid
                     AND s.revision = ANY (CASE f.src WHEN 1 THEN $2 WHEN 2 THEN $3 ELSE $1[2]::integer[] END)
                     AND NOT (s.lastrevs && CASE f.src WHEN 1 THEN $2 WHEN 2 THEN $3 ELSE $1[2]::integer[] END)
-                  ORDER BY f.id', v_vals, v_pt.schemaname, v_pt.tablename || '_ver'),
+                  ORDER BY f.id', v_vals, tgsis.storage_row_versions(v_pt.schemaname, v_pt.tablename, v_t.src_ids)),
                 p_1 => ARRAY[p_geoid::text, v_cset::text], p_2 => v_base, p_3 => v_pset,
                 p_5 => v_t.ids || v_t.src_ids || v_t.src::bigint[]) AS r)
                   || v_t.given;  -- the rows of average and manual solutions, their values as the solution gives them
@@ -370,7 +370,17 @@ BEGIN
                 USING ERRCODE = 'TG302', HINT = v_hint;
         END IF;
         v_written := v_written + tgsis.delete_object_rows(v_t.schemaname, v_t.tablename, '_geoid', ARRAY[p_geoid], '_idx', v_t.gone);
-        IF cardinality(v_rows) > 0 THEN
+        IF cardinality(v_rows) > 0 AND tgsis.stored_in_chunks(v_pt.schemaname, v_pt.tablename) THEN
+            -- a property table stored in chunks (tgsis.store_class_in_chunks): through its face, whose trigger
+            -- rewrites the touched chunks in the working revision with the caller's rights
+            EXECUTE format('INSERT INTO %I.%I (_geoid, _idx, %s)
+                            SELECT $1[1]::bigint, $1[2 + (g.i - 1) * %s]::bigint, %s
+                              FROM generate_series(1, (cardinality($1) - 1) / %s) AS g(i)',
+                           v_pt.schemaname, v_pt.tablename, v_cols, v_width, v_casts, v_width)
+              USING ARRAY[p_geoid::text] || ARRAY(SELECT unnest(v_rows));
+            GET DIAGNOSTICS v_count = ROW_COUNT;
+            v_written := v_written + v_count;
+        ELSIF cardinality(v_rows) > 0 THEN
             SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_pt, true, format(
                 'INSERT INTO %I.%I (_geoid, _idx, %s, revision)
                  SELECT $1[1]::bigint, $1[2 + (g.i - 1) * %s]::bigint, %s, $4

@@ -13,7 +13,9 @@
 -- is the text of a missing row. p_times (model 2): the rows of that instant only (_times), the
 -- property tables of a surface at instants being keyed (_times, _idx); with p_timem (model 3) the rows of
 -- the geometry instant p_times of the period p_timem (_timem, _timet). extra_float_digits is pinned:
--- exact floats.
+-- exact floats. A property table stored in chunks (tgsis.store_class_in_chunks)
+-- is read as its decoded chunk versions (tgsis.storage_row_versions: with
+-- p_keys only the chunks holding them).
 CREATE FUNCTION tgsis.merge_property_rows(p_t tgsis.versioned_tables, p_geoid bigint, p_since integer[],
                                           p_keys bigint[], p_base integer[], p_parent integer[], p_child integer[],
                                           p_times float8 DEFAULT NULL, p_timem float8 DEFAULT NULL)
@@ -36,9 +38,9 @@ BEGIN
         RETURN QUERY
         SELECT r[1]::bigint, NULL::integer, NULL::text
           FROM tgsis.storage_run(p_t, false, format(
-                 'SELECT ARRAY[v._idx::text] FROM %I.%I v WHERE v._geoid = $1[1]::bigint
+                 'SELECT ARRAY[v._idx::text] FROM %s v WHERE v._geoid = $1[1]::bigint
                      AND (v.revision = ANY ($1[2]::integer[]) OR (v.revclosed AND v.lastrevs && $1[2]::integer[]))%s',
-                 p_t.schemaname, p_t.tablename || '_ver', v_slice),
+                 tgsis.storage_row_versions(p_t.schemaname, p_t.tablename), v_slice),
                p_1 => ARRAY[p_geoid::text, p_since::text]) AS r;
         RETURN;
     END IF;
@@ -47,10 +49,10 @@ BEGIN
       FROM tgsis.storage_run(p_t, false, format(
              'SELECT ARRAY[w._idx::text, w.seen::text, w.val]
                 FROM (SELECT v._idx, %1$s::integer | (%2$s::integer << 1) | (%3$s::integer << 2) AS seen, %4$s AS val
-                        FROM %5$I.%6$I v WHERE v._geoid = $1[1]::bigint AND v._idx = ANY ($1[2]::bigint[])%7$s) AS w
+                        FROM %5$s v WHERE v._geoid = $1[1]::bigint AND v._idx = ANY ($1[2]::bigint[])%6$s) AS w
                WHERE w.seen <> 0',
              format(v_vis, '$2'), format(v_vis, '$5::integer[]'), format(v_vis, '$3'), v_canon,
-             p_t.schemaname, p_t.tablename || '_ver', v_slice),
+             tgsis.storage_row_versions(p_t.schemaname, p_t.tablename, p_keys), v_slice),
            p_1 => ARRAY[p_geoid::text, p_keys::text], p_2 => p_base, p_3 => p_child,
            p_5 => p_parent::bigint[]) AS r;
 END

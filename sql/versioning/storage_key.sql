@@ -12,12 +12,15 @@ LANGUAGE sql
 STABLE
 SET search_path = pg_catalog, pg_temp
 AS $$
-    SELECT CASE WHEN p_t.schemaname = 'tgsis' AND tgsis.stored_in_chunks(p_t.tablename)
+    SELECT CASE WHEN tgsis.stored_in_chunks(p_t.schemaname, p_t.tablename)
                 THEN ARRAY(SELECT CASE WHEN u.k = m.chunkcolumn THEN 'chunk' ELSE u.k END
                              FROM pg_catalog.unnest(p_t.keycolumns) WITH ORDINALITY AS u(k, o)
                             ORDER BY u.o)
                 ELSE p_t.keycolumns END
-      FROM (SELECT (SELECT t.chunkcolumn FROM tgsis.model_tables t WHERE t.tablename = p_t.tablename) AS chunkcolumn) m
+      -- (a class's property table is chunked by _idx: tgsis.chunk_registry)
+      FROM (SELECT CASE WHEN p_t.schemaname = 'tgsis'
+                        THEN (SELECT t.chunkcolumn FROM tgsis.model_tables t WHERE t.tablename = p_t.tablename)
+                        ELSE '_idx' END AS chunkcolumn) m
 $$;
 
 REVOKE ALL ON FUNCTION tgsis.storage_key(tgsis.versioned_tables) FROM PUBLIC;
@@ -25,4 +28,4 @@ REVOKE ALL ON FUNCTION tgsis.storage_key(tgsis.versioned_tables) FROM PUBLIC;
 GRANT EXECUTE ON FUNCTION tgsis.storage_key(tgsis.versioned_tables) TO tgsis_reader;
 
 COMMENT ON FUNCTION tgsis.storage_key(tgsis.versioned_tables) IS
-    'the key columns of a versioned table''s stored versions, without revision: the row key (keycolumns) for <table>_ver, the chunk key (the local-id column replaced by chunk) for tgsis.<table>_chunk';
+    'the key columns of a versioned table''s stored versions, without revision: the row key (keycolumns) for <table>_ver, the chunk key (the local-id column replaced by chunk) for a chunk table (tgsis.<table>_chunk, a class''s <table>_chunk: _idx replaced)';

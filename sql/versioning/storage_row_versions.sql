@@ -5,7 +5,7 @@
 -- tgsis.conflict_discards) read one relation of rows with the row table's
 -- columns and the versioning columns: <table>_ver when the rows are stored
 -- as rows (tgsis.storage_table), the decoded chunk versions when a model
--- table is stored in chunks (tgsis.stored_in_chunks: a row per present slot
+-- table or a class's property table is stored in chunks (tgsis.stored_in_chunks: a row per present slot
 -- of every chunk version, with its chunk version's revision, lastrevs and
 -- revclosed, so a visibility test on them reads as on rows). A filter on
 -- geoid and on the versioning columns reaches the chunk table, one on a
@@ -29,25 +29,27 @@ AS $$
 DECLARE
     v_size bigint;
     v_dec  record;
+    v_name text;
 BEGIN
-    IF p_schema IS DISTINCT FROM 'tgsis' OR NOT tgsis.stored_in_chunks(p_table) THEN
+    IF NOT tgsis.stored_in_chunks(p_schema, p_table) THEN
         RETURN tgsis.storage_table(p_schema, p_table);
     END IF;
+    v_name := CASE WHEN p_schema = 'tgsis' THEN p_table ELSE format('%I.%I', p_schema, p_table) END;  -- (tgsis.chunk_registry)
     IF p_ids IS NULL THEN
-        RETURN format('tgsis.%I', p_table || '_chunk_rows');
+        RETURN format('%I.%I', p_schema, p_table || '_chunk_rows');
     END IF;
-    v_size := (SELECT t.chunksize FROM tgsis.model_tables t WHERE t.tablename = p_table);
+    EXECUTE format('SELECT r.chunksize FROM tgsis.%I($1) AS r', 'chunk_registry') INTO v_size USING v_name;
     EXECUTE format('SELECT d.select_list, d.arrays, d.aliases, d.present FROM tgsis.%I($1, $2) AS d', 'chunk_decode_sql')
-       INTO v_dec USING p_table, 'c';
-    RETURN format('(SELECT %s, c.revision, c.lastrevs, c.revclosed FROM tgsis.%I c CROSS JOIN LATERAL unnest(%s) WITH ORDINALITY AS u(%s, o)'
+       INTO v_dec USING v_name, 'c';
+    RETURN format('(SELECT %s, c.revision, c.lastrevs, c.revclosed FROM %I.%I c CROSS JOIN LATERAL unnest(%s) WITH ORDINALITY AS u(%s, o)'
                   ' WHERE %s AND c.chunk = ANY (%L::bigint[]))',
-                  v_dec.select_list, p_table || '_chunk', v_dec.arrays, v_dec.aliases, v_dec.present,
+                  v_dec.select_list, p_schema, p_table || '_chunk', v_dec.arrays, v_dec.aliases, v_dec.present,
                   ARRAY(SELECT DISTINCT i / v_size FROM unnest(p_ids) AS i WHERE i >= 0 ORDER BY 1));
 END
 $$;
 
 COMMENT ON FUNCTION tgsis.storage_row_versions(text, text, bigint[]) IS
-    'SQL of the relation of a table''s stored row versions (the row table''s columns, then revision, lastrevs, revclosed): when the model table is stored in chunks (tgsis.stored_in_chunks), its decoded chunk versions, only the chunks holding p_ids when given (else the view tgsis.<table>_chunk_rows); else tgsis.storage_table''s relation (<table>_ver, or the table itself)';
+    'SQL of the relation of a table''s stored row versions (the row table''s columns, then revision, lastrevs, revclosed): when the model table or a class''s property table is stored in chunks (tgsis.stored_in_chunks(schema, table)), its decoded chunk versions, only the chunks holding p_ids when given (else the view <table>_chunk_rows); else tgsis.storage_table''s relation (<table>_ver, or the table itself)';
 
 -- internal to the merges' readers, not executable by PUBLIC (tests/test_function_grants.py); tgsis.mesh_merge_work runs it as the calling tgsis role
 REVOKE ALL ON FUNCTION tgsis.storage_row_versions(text, text, bigint[]) FROM PUBLIC;

@@ -17,7 +17,7 @@ DECLARE
     v_rel   regclass := to_regclass(format('%I.%I', p_schema, p_table));
     v_still boolean;
 BEGIN
-    IF p_schema = 'tgsis' AND tgsis.stored_in_chunks(p_table) THEN
+    IF tgsis.stored_in_chunks(p_schema, p_table) THEN
         v_still := EXISTS (SELECT FROM pg_trigger tr WHERE tr.tgrelid = v_rel AND tr.tgname = 'tgsis_versioning_rights');
     ELSE
         v_still := v_rel IS NULL OR (SELECT relkind FROM pg_class WHERE oid = v_rel) NOT IN ('r', 'p')

@@ -259,8 +259,8 @@ def _readable_storages(conn: Conn, tables: list[_Table]) -> list[str] | None:
         "SELECT s.storage, t.objectkeyfield IS NOT DISTINCT FROM k.key AND has_table_privilege(s.storage, 'SELECT')"
         "  FROM unnest(%s::text[], %s::text[], %s::text[]) WITH ORDINALITY AS k(schemaname, tablename, key, n)"
         "  LEFT JOIN tgsis.versioned_tables t ON t.schemaname = k.schemaname AND t.tablename = k.tablename"
-        "  CROSS JOIN LATERAL (SELECT CASE WHEN k.schemaname = 'tgsis' AND tgsis.stored_in_chunks(k.tablename)"
-        "                                  THEN format('tgsis.%%I', k.tablename || '_chunk_rows')"
+        "  CROSS JOIN LATERAL (SELECT CASE WHEN tgsis.stored_in_chunks(k.schemaname, k.tablename)"
+        "                                  THEN format('%%I.%%I', k.schemaname, k.tablename || '_chunk_rows')"
         "                                  ELSE tgsis.storage_table(k.schemaname, k.tablename) END AS storage) s"
         " ORDER BY k.n",
         ([t.schema for t in tables], [t.view for t in tables], [t.key for t in tables]),

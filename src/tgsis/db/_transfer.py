@@ -324,6 +324,9 @@ class Storage:
     viewing: int | None = None
     #: the relation storing each versioned table's rows, quoted, as SQL's ``tgsis.storage_table`` names it
     stored_in: Mapping[tuple[str, str], str] = field(default_factory=dict)
+    #: versioned property tables stored in chunks (``tgsis.store_class_in_chunks``): rows go through their face,
+    #: whose trigger writes the chunks in the working revision
+    faces: frozenset[tuple[str, str]] = frozenset()
 
     @classmethod
     def of(cls, conn: Conn, fc: FeatureClass | None = None) -> Storage:
@@ -339,12 +342,12 @@ class Storage:
         NotVersionedError
             ``fc`` has no versioning and the session is elsewhere (nothing is written).
         """
-        stored_in = {
-            (r[0], r[1]): str(r[2])
-            for r in conn.execute(
-                "SELECT schemaname, tablename, tgsis.storage_table(schemaname, tablename) FROM tgsis.versioned_tables"
-            ).fetchall()
-        }
+        tables = conn.execute(
+            "SELECT schemaname, tablename, tgsis.storage_table(schemaname, tablename),"
+            " schemaname <> 'tgsis' AND tgsis.stored_in_chunks(schemaname, tablename) FROM tgsis.versioned_tables"
+        ).fetchall()
+        stored_in = {(r[0], r[1]): str(r[2]) for r in tables}
+        faces = frozenset((r[0], r[1]) for r in tables if r[3])
         versioned = frozenset(stored_in)
         session = conn.execute(
             "SELECT tgsis.get_working_version(), tgsis.get_viewing_revision(), "
@@ -353,7 +356,7 @@ class Storage:
         assert session is not None
         version, viewing, working = session
         elsewhere = version != "DEFAULT" or (viewing is not None and viewing != working)
-        storage = cls(versioned, None, version if elsewhere else None, viewing if elsewhere else None, stored_in)
+        storage = cls(versioned, None, version if elsewhere else None, viewing if elsewhere else None, stored_in, faces)
         unversioned = fc is not None and not fc.versioned
         if unversioned:
             assert fc is not None
@@ -452,12 +455,14 @@ class Storage:
     def table(self, schema: str, table: str) -> sql.Composable:
         """The relation that stores the rows of ``schema.table``: itself, or its versioned storage
         (``tgsis.storage_table``, read with the set of versioned tables)."""
-        stored = self.stored_in.get((schema, table))
+        stored = None if (schema, table) in self.faces else self.stored_in.get((schema, table))
         return sql.Identifier(schema, table) if stored is None else sql.SQL(stored)  # quoted by format('%I.%I')
 
     def _target(self, schema: str, table: str, columns: Columns) -> tuple[sql.Composable, Columns]:
         """Where ``columns`` go: the table, or its versioned storage with the revision column added."""
         self.check(schema, table)
+        if (schema, table) in self.faces:
+            return sql.Identifier(schema, table), columns
         count = len(np.asarray(columns[0][1])) if columns else 0
         if (schema, table) in self.versioned:
             assert self.revision is not None

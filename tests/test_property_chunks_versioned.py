@@ -1,0 +1,485 @@
+"""A versioned feature class's property table in chunks (issue 40, plan F area P).
+
+docs/storage.md, "Property chunks: the contract", "Versioning": ``tgsis.store_class_in_chunks`` switches a
+versioned class with its history, and ``tgsis.enable_feature_versioning`` versions a class whose properties
+are in chunks; the chunk table is then the class table's versioned storage (``tgsis.storage_table``,
+``tgsis.storage_key``), guarded as ``<table>_ver`` was, and every versioned path (the face's reads at a
+version and its writes, check-in by difference, merges, conflicts, compress) acts on chunk versions.
+The tests compare each view (every version's working set and every revision) bit for bit against the
+same operations on a class whose properties stay rows, in the same database. The property tables are
+rows or chunks whatever model 1's storage is, so the file runs unmarked.
+"""
+
+from __future__ import annotations
+
+import struct
+from typing import Any
+
+import numpy as np
+import psycopg
+import pytest
+from psycopg import sql
+
+import tgsis
+from tests.merge_data import every_view, sqlstate, varied_history
+from tgsis.db import features as F
+from tgsis.mesh import Surface
+
+Conn = psycopg.Connection[Any]
+
+FAULTS = "public.faults_cellpros"
+
+
+def _look(conn: Conn, version: str, revision: int | None) -> None:
+    if revision is None:
+        conn.execute("SELECT tgsis.goto_version(%s, true)", (version,))
+    else:
+        conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, revision))
+
+
+def _faults_rows(conn: Conn) -> list[tuple[Any, ...]]:
+    return [
+        tuple(r)
+        for r in conn.execute(
+            "SELECT _geoid, _idx, float8send(porosity) FROM public.faults_cellpros ORDER BY 1, 2"
+        ).fetchall()
+    ]
+
+
+def _every_view_rows(conn: Conn) -> dict[tuple[str, int | None], list[tuple[Any, ...]]]:
+    seen = {}
+    for version, revision in every_view(conn):
+        _look(conn, version, revision)
+        seen[(version, revision)] = _faults_rows(conn)
+    conn.execute("SELECT tgsis.goto_version('DEFAULT', true)")
+    return seen
+
+
+def test_a_versioned_class_switches_with_its_history(conn: Conn, fault_clone: int) -> None:
+    varied_history(conn, fault_clone)
+    before = _every_view_rows(conn)
+    assert len(before) >= 10 and len({tuple(v) for v in before.values()}) > 3  # views that differ
+    written = conn.execute("SELECT tgsis.store_class_in_chunks('faults')").fetchone()
+    conn.commit()
+    assert written is not None and written[0] > 1
+    assert conn.execute("SELECT tgsis.storage_table('public', 'faults_cellpros')").fetchone() == (
+        "public.faults_cellpros_chunk",
+    )
+    assert _every_view_rows(conn) == before
+
+
+# --------------------------------------------------------------------------- the same operations on rows and on chunks
+
+#: float8 bit patterns that must survive: -0.0, the smallest subnormal, a NaN with a payload, 1 + 1 ulp
+PATTERNS = [0x8000000000000000, 0x0000000000000001, 0x7FF8000000000ABC, 0x3FF0000000000001]
+TWINS = ("onrows", "inchunks")
+
+
+def _double(bits: int) -> float:
+    value: float = struct.unpack(">d", struct.pack(">Q", bits))[0]
+    return value
+
+
+def _twin_rows(conn: Conn, name: str) -> list[tuple[Any, ...]]:
+    """The class's property rows as a psql user reads them, the feature named by its order (geoids differ)."""
+    query = sql.SQL(
+        "SELECT dense_rank() OVER (ORDER BY _geoid), _idx, float8send(porosity), facies FROM public.{} ORDER BY 1, 2"
+    ).format(sql.Identifier(f"{name}_cellpros"))
+    return [tuple(r) for r in conn.execute(query).fetchall()]
+
+
+def _twin_views(conn: Conn) -> dict[str, dict[tuple[str, int | None], list[tuple[Any, ...]]]]:
+    seen: dict[str, dict[tuple[str, int | None], list[tuple[Any, ...]]]] = {name: {} for name in TWINS}
+    for version, revision in every_view(conn):
+        _look(conn, version, revision)
+        for name in TWINS:
+            seen[name][(version, revision)] = _twin_rows(conn, name)
+    conn.execute("SELECT tgsis.goto_version('DEFAULT', true)")
+    conn.commit()
+    return seen
+
+
+def _surface(nan_payload: bool = True) -> Surface:
+    """A curved surface with a double and an integer vertex property; the first doubles PATTERNS' bits (without
+    ``nan_payload`` the NaN is the canonical one: pg_dump writes floats as text, which keeps no NaN payload)."""
+    from tests.merge_data import curved_surface
+
+    surface = curved_surface(40)  # 1,600 vertices: two chunks
+    porosity = surface.vertex_properties["porosity"].copy()
+    porosity[:4] = [_double(p if nan_payload or p != 0x7FF8000000000ABC else 0x7FF8000000000000) for p in PATTERNS]
+    return Surface(
+        surface.vertices,
+        surface.cells,
+        vertex_properties={"porosity": porosity, "facies": (np.arange(surface.n_vertices, dtype=np.int32) % 7) - 3},
+    )
+
+
+def _each(conn: Conn, version: str, statement: str, geoids: dict[str, int], params: tuple[Any, ...] = ()) -> None:
+    """One psql statement on each twin's property table in ``version`` (``{table}``, ``%(g)s`` its feature)."""
+    with tgsis.in_version(conn, version):
+        for name in TWINS:
+            conn.execute(
+                sql.SQL(statement).format(table=sql.Identifier("public", f"{name}_cellpros")),
+                {"g": geoids[name], "p": list(params)},
+            )
+        conn.commit()
+
+
+def _edited(conn: Conn, name: str, geoid: int, change: dict[int, float], drop_last: int = 0) -> Surface:
+    state = F.fetch_feature(conn, name, geoid).mesh
+    assert isinstance(state, Surface)
+    porosity = state.vertex_properties["porosity"].copy()
+    for i, value in change.items():
+        porosity[i] = value
+    keep = np.arange(state.n_vertices - drop_last)
+    inside = np.all(state.cells < len(keep), axis=1)
+    return Surface(
+        state.vertices[keep],
+        state.cells[inside],
+        vertex_properties={"porosity": porosity[keep], "facies": state.vertex_properties["facies"][keep]},
+    )
+
+
+@pytest.mark.parametrize("switch", ["before_versioning", "while_versioned"])
+def test_every_view_equals_the_same_operations_on_rows(conn: Conn, switch: str) -> None:
+    """Face writes in versions, a check-in by difference, merges of both sides' property edits (by region, and a
+    conflict solved), compress: every version's and revision's rows equal, bit for bit, those of the twin class
+    whose properties stay rows."""
+    for name in TWINS:
+        tgsis.create_feature_class(
+            conn, name, "SURFACE", cell_properties=[("porosity", "double precision"), ("facies", "integer")]
+        )
+    if switch == "before_versioning":
+        conn.execute("SELECT tgsis.store_class_in_chunks('inchunks')")
+    tgsis.enable_feature_versioning(conn)
+    conn.commit()
+    mesh = _surface()
+    geoids = {name: F.insert_feature(conn, name, mesh) for name in TWINS}
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    # e1: psql writes through the face (one value, a bulk update, a delete, an insert)
+    _each(conn, "e1", "UPDATE {table} SET porosity = '-0' WHERE _geoid = %(g)s AND _idx = 7", geoids)
+    _each(conn, "e1", "UPDATE {table} SET facies = facies + 1 WHERE _geoid = %(g)s AND _idx < 40", geoids)
+    _each(conn, "e1", "DELETE FROM {table} WHERE _geoid = %(g)s AND _idx = 100", geoids)
+    _each(conn, "e1", "INSERT INTO {table} VALUES (%(g)s, 100, 'NaN', 5)", geoids)
+    if switch == "while_versioned":
+        assert conn.execute("SELECT tgsis.store_class_in_chunks('inchunks')").fetchone() is not None
+        conn.commit()
+    tgsis.goto_version(conn, "e1")
+    tgsis.save_revision(conn, "e1 first")
+    conn.commit()
+    tgsis.create_version(conn, "e2", "e1")
+    conn.commit()
+    # e2: a check-in by difference changing values and deleting the grid's last row
+    with tgsis.in_version(conn, "e2"):
+        for name in TWINS:
+            tgsis.save_feature(conn, name, geoids[name], _edited(conn, name, geoids[name], {200: 1.25, 1500: -3.5}, 40))
+        conn.commit()
+    # DEFAULT changes properties of the object too: a merge of e1 meets both sides' edits
+    _each(conn, "DEFAULT", "UPDATE {table} SET porosity = 42.0 WHERE _geoid = %(g)s AND _idx = 800", geoids)
+    tgsis.merge_version(conn, "e2")  # into e1 (only e2 changed since: no conflict)
+    conn.commit()
+    _each(conn, "e1", "UPDATE {table} SET facies = -9 WHERE _geoid = %(g)s AND _idx = 1201", geoids)
+    result = tgsis.merge_version(conn, "e1")  # into DEFAULT: both changed the object, in other regions
+    conn.commit()
+    assert result is not None
+    # the same vertex on both sides: a conflict solved by the child's side
+    _each(conn, "e1", "UPDATE {table} SET porosity = 1.0 WHERE _geoid = %(g)s AND _idx = 300", geoids)
+    _each(conn, "DEFAULT", "UPDATE {table} SET porosity = 2.0 WHERE _geoid = %(g)s AND _idx = 300", geoids)
+    with pytest.raises(tgsis.UnsolvedConflictsError):
+        tgsis.merge_version(conn, "e1")
+    conn.rollback()
+    for name in TWINS:
+        tgsis.resolve_conflict(conn, "e1", "feature", geoids[name], "child")
+    conn.commit()
+    tgsis.merge_version(conn, "e1")
+    conn.commit()
+    views = _twin_views(conn)
+    assert len(views["onrows"]) >= 8
+    assert views["inchunks"] == views["onrows"]
+    # what reports rows reads the decoded chunk versions: the same counts as on rows
+    reports = {}
+    for name in TWINS:
+        table = f"public.{name}_cellpros"
+        diff = conn.execute(
+            "SELECT added, removed, changed FROM tgsis.diff_table(%s::regclass, 'e2', 'DEFAULT')", (table,)
+        ).fetchall()
+        at = conn.execute(
+            sql.SQL("SELECT count(*), sum(facies) FROM tgsis.rows_at(NULL::{}, 'e2')").format(sql.SQL(table))
+        ).fetchone()
+        reports[name] = (diff, at)
+    conn.rollback()
+    assert reports["inchunks"] == reports["onrows"] and reports["onrows"][0] != [], reports
+    with tgsis.in_version(conn, "DEFAULT"):
+        final = dict((r[1], r[2:]) for r in _twin_rows(conn, "inchunks"))
+    assert final[300][0] == struct.pack(">d", 1.0) and final[800][0] == struct.pack(">d", 42.0)
+    assert final[1201][1] == -9 and final[100][1] == 5 and final[7][0] == struct.pack(">d", -0.0)
+    assert final[2][0] == struct.pack(">Q", PATTERNS[2])  # the NaN payload kept through every path
+    # the storage: chunk versions, guarded as <table>_ver was
+    assert conn.execute("SELECT tgsis.storage_table('public', 'inchunks_cellpros')").fetchone() == (
+        "public.inchunks_cellpros_chunk",
+    )
+    versions = conn.execute("SELECT count(*), count(DISTINCT chunk) FROM public.inchunks_cellpros_chunk").fetchone()
+    assert versions is not None and versions[0] > versions[1]
+    # compress keeps what every kept set sees
+    tgsis.compress_versions(conn)
+    conn.commit()
+    kept = _twin_views(conn)
+    assert kept["inchunks"] == kept["onrows"]
+    assert kept["inchunks"] == {k: v for k, v in views["inchunks"].items() if k in kept["inchunks"]}
+
+
+# --------------------------------------------------------------------------- refusals, sessions, rights, dump
+
+
+def _versioned_layer(conn: Conn, nan_payload: bool = True) -> tuple[int, Surface]:
+    """Class layer (porosity, facies), versioned, one surface stored, its properties in chunks; version e1."""
+    tgsis.create_feature_class(
+        conn, "layer", "SURFACE", cell_properties=[("porosity", "double precision"), ("facies", "integer")]
+    )
+    tgsis.enable_feature_versioning(conn)
+    mesh = _surface(nan_payload)
+    geoid = F.insert_feature(conn, "layer", mesh)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    conn.execute("SELECT tgsis.store_class_in_chunks('layer')")
+    conn.commit()
+    return geoid, mesh
+
+
+def _layer(conn: Conn, where: str = "true") -> list[tuple[Any, ...]]:
+    query = sql.SQL(
+        "SELECT _geoid, _idx, float8send(porosity), facies FROM public.layer_cellpros WHERE {} ORDER BY 1, 2"
+    ).format(sql.SQL(where))
+    return [tuple(r) for r in conn.execute(query).fetchall()]
+
+
+def test_what_is_not_built_for_a_versioned_class_is_refused_by_name(conn: Conn) -> None:
+    geoid, _ = _versioned_layer(conn)
+    before = _layer(conn)
+    chunks = conn.execute("SELECT count(*) FROM public.layer_cellpros_chunk").fetchone()
+    state, message = sqlstate(conn, "SELECT tgsis.store_class_in_rows('layer')")
+    assert state == "TG300" and "versioned" in message
+    assert sqlstate(conn, "SELECT tgsis.store_class_in_chunks('layer')")[0] == "TG201"
+    assert _layer(conn) == before
+    assert conn.execute("SELECT count(*) FROM public.layer_cellpros_chunk").fetchone() == chunks
+    assert geoid > 0
+
+
+def test_two_sessions_writing_one_chunk_in_a_version_keep_both_values(db_dsn: str, conn: Conn) -> None:
+    from tests.sessions import Background, connect, wait_until_blocked
+
+    geoid, _ = _versioned_layer(conn)
+    first = connect(db_dsn, "first")
+    tgsis.goto_version(first, "e1")
+    first.execute("UPDATE public.layer_cellpros SET facies = 41 WHERE _geoid = %s AND _idx = 1", (geoid,))
+
+    def second_writer(session: Conn) -> None:
+        tgsis.goto_version(session, "e1")
+        session.execute("UPDATE public.layer_cellpros SET facies = 42 WHERE _geoid = %s AND _idx = 2", (geoid,))
+
+    second = Background(db_dsn, "second", second_writer)
+    wait_until_blocked(conn, second.pid, first.info.backend_pid)  # the chunk's lock
+    conn.rollback()
+    first.commit()
+    first.close()
+    second.finish()
+    with tgsis.in_version(conn, "e1"):
+        assert _layer(conn, "_idx IN (1, 2)") == [
+            (geoid, 1, _layer(conn, "_idx = 1")[0][2], 41),
+            (geoid, 2, _layer(conn, "_idx = 2")[0][2], 42),
+        ]
+    # DEFAULT still sees the chunk as it was: e1's writes are chunk versions of e1's revision
+    assert [r[3] for r in _layer(conn, "_idx IN (1, 2)")] == [(1 % 7) - 3, (2 % 7) - 3]
+
+
+def test_a_role_with_fewer_rights_reads_at_a_version_and_cannot_write(db_dsn: str, conn: Conn) -> None:
+    from tests.roles import login_roles
+
+    geoid, _ = _versioned_layer(conn)
+    with tgsis.in_version(conn, "e1"):
+        conn.execute("UPDATE public.layer_cellpros SET facies = 7 WHERE _geoid = %s AND _idx = 3", (geoid,))
+        conn.commit()
+    with login_roles(db_dsn, {"reader": "tgsis_reader", "editor": "tgsis_editor"}) as roles:
+        reader = roles.connect("reader")
+        tgsis.goto_version(reader, "e1")
+        assert reader.execute(
+            "SELECT facies FROM public.layer_cellpros WHERE _geoid = %s AND _idx = 3", (geoid,)
+        ).fetchone() == (7,)
+        update = "UPDATE public.layer_cellpros SET facies = 5 WHERE _geoid = %s AND _idx = 4"
+        assert sqlstate(reader, update, (geoid,))[0] == "42501"
+        # the chunk table itself: no UPDATE, DELETE; an INSERT of a chunk version needs the write right
+        assert sqlstate(reader, "UPDATE public.layer_cellpros_chunk SET facies[1] = 0")[0] == "42501"
+        assert sqlstate(reader, "DELETE FROM public.layer_cellpros_chunk")[0] == "42501"
+        state, _ = sqlstate(
+            reader,
+            "INSERT INTO public.layer_cellpros_chunk (_geoid, chunk, revision, holes, porosity, facies) "
+            "VALUES (%s, 99, 0, '{}', '{1.0}', '{1}')",
+            (geoid,),
+        )
+        assert state is not None
+        reader.rollback()
+        editor = roles.connect("editor")
+        tgsis.goto_version(editor, "e1")  # not the editor's version: no write right there
+        assert sqlstate(editor, update, (geoid,))[0] == "TG002"
+        tgsis.goto_version(editor, "DEFAULT")
+        assert sqlstate(editor, update, (geoid,)) == (None, "")
+        assert sqlstate(editor, "UPDATE public.layer_cellpros_chunk SET facies[1] = 0")[0] == "42501"
+        editor.commit()
+    with tgsis.in_version(conn, "e1"):
+        assert [r[3] for r in _layer(conn, "_idx IN (3, 4)")] == [7, 1]  # e1 sees its own, not DEFAULT's later write
+    assert [r[3] for r in _layer(conn, "_idx IN (3, 4)")] == [0, 5]
+
+
+#: the chunk versions with their arrays' send forms (doubles by their bits)
+CHUNK_BITS = (
+    "SELECT _geoid, chunk, revision, lastrevs, holes, array_send(porosity), array_send(facies) "
+    "FROM public.layer_cellpros_chunk ORDER BY 1, 2, 3"
+)
+
+
+def test_pg_dump_and_restore_keep_a_versioned_class_in_chunks(pg: Any, db_dsn: str, conn: Conn, tmp_path: Any) -> None:
+    from tests.test_backup import _bindir_of, _restored
+
+    geoid, _ = _versioned_layer(conn, nan_payload=False)
+    with tgsis.in_version(conn, "e1"):
+        conn.execute("UPDATE public.layer_cellpros SET facies = 11 WHERE _geoid = %s AND _idx = 1030", (geoid,))
+        conn.commit()
+    views = {}
+    for version, revision in every_view(conn):
+        _look(conn, version, revision)
+        views[(version, revision)] = _layer(conn)
+    conn.execute("SELECT tgsis.goto_version('DEFAULT', true)")
+    chunks = conn.execute(CHUNK_BITS).fetchall()
+    conn.rollback()
+    with _restored(pg, _bindir_of(pg), db_dsn, "custom", tmp_path) as dsn, psycopg.connect(dsn) as copy:
+        assert copy.execute(CHUNK_BITS).fetchall() == chunks
+        for (version, revision), rows in views.items():
+            _look(copy, version, revision)
+            assert _layer(copy) == rows, (version, revision)
+        # the restored storage is versioned and guarded: a write in e1 writes a chunk version of e1
+        copy.execute("SELECT tgsis.goto_version('e1', true)")
+        copy.execute("UPDATE public.layer_cellpros SET facies = 12 WHERE _geoid = %s AND _idx = 1031", (geoid,))
+        copy.commit()
+        copy.execute("SELECT tgsis.goto_version('e1', true)")
+        assert [r[3] for r in _layer(copy, "_idx IN (1030, 1031)")] == [11, 12]
+        copy.rollback()
+        assert [r[3] for r in _layer(copy, "_idx IN (1030, 1031)")] == [1030 % 7 - 3, 1031 % 7 - 3]
+        triggers = copy.execute(
+            "SELECT count(*) FROM pg_trigger WHERE tgrelid = 'public.layer_cellpros_chunk'::regclass "
+            "AND tgname LIKE 'tgsis_storage_%'"
+        ).fetchone()
+        assert triggers == (3,)
+
+
+def test_a_feature_deleted_in_a_version_then_versioning_disabled_and_back_to_rows(conn: Conn) -> None:
+    geoid, _ = _versioned_layer(conn)
+    with tgsis.in_version(conn, "e1"):
+        conn.execute("UPDATE public.layer_cellpros SET facies = 70 WHERE _geoid = %s AND _idx = 1500", (geoid,))
+        conn.commit()
+    tgsis.create_version(conn, "gone")
+    conn.commit()
+    default = _layer(conn)
+    with tgsis.in_version(conn, "gone"):
+        assert F.delete_feature(conn, "layer", geoid)
+        conn.commit()
+        assert _layer(conn) == []
+    with tgsis.in_version(conn, "e1"):
+        assert [r[3] for r in _layer(conn, "_idx = 1500")] == [70]
+    assert _layer(conn) == default  # the deletion closed chunk versions in gone's revision only
+    assert conn.execute("SELECT count(*) FROM public.layer_cellpros_chunk WHERE revclosed").fetchone() != (0,)
+    # versioning off: DEFAULT's chunk versions stay, as revision 0; the class goes back to rows
+    tgsis.disable_feature_versioning(conn, force=True)
+    conn.commit()
+    assert _layer(conn) == default
+    assert conn.execute(
+        "SELECT count(*) FILTER (WHERE revision <> 0 OR revclosed), count(*) FROM public.layer_cellpros_chunk"
+    ).fetchone() == (0, 2)
+    assert conn.execute("SELECT tgsis.store_class_in_rows('layer')").fetchone() == (len(default),)
+    conn.commit()
+    assert _layer(conn) == default
+
+
+def test_a_check_in_is_refused_when_a_property_changed_since_the_check_out(conn: Conn) -> None:
+    """The check-out's fingerprint covers the property chunks the version sees: a value changed through the face
+    after the check-out (one chunk version, one slot) refuses the check-in; a check-in from a fresh check-out
+    writes the property in the version only."""
+    geoid, mesh = _versioned_layer(conn)
+    tgsis.goto_version(conn, "e1")
+    conn.commit()
+    co = tgsis.checkout(conn, geoid)
+    conn.commit()
+    edited = co.mesh
+    assert isinstance(edited, Surface)
+    porosity = edited.vertex_properties["porosity"].copy()
+    porosity[1100] = -0.0
+    changed = Surface(
+        edited.vertices, edited.cells, vertex_properties={**edited.vertex_properties, "porosity": porosity}
+    )
+    conn.execute("UPDATE public.layer_cellpros SET facies = 3 WHERE _geoid = %s AND _idx = 1500", (geoid,))
+    conn.commit()
+    with pytest.raises(tgsis.CheckoutConflictError):
+        tgsis.checkin(conn, co, changed)
+    conn.rollback()
+    co = tgsis.checkout(conn, geoid)
+    conn.commit()
+    assert isinstance(co.mesh, Surface)
+    porosity = co.mesh.vertex_properties["porosity"].copy()
+    porosity[1100] = -0.0
+    tgsis.checkin(
+        conn,
+        co,
+        Surface(co.mesh.vertices, co.mesh.cells, vertex_properties={**co.mesh.vertex_properties, "porosity": porosity}),
+    )
+    conn.commit()
+    assert _layer(conn, "_idx = 1100")[0][2] == struct.pack(">d", -0.0)
+    tgsis.goto_version(conn, "DEFAULT")
+    conn.commit()
+    assert _layer(conn, "_idx = 1100")[0][2] == struct.pack(">d", float(mesh.vertex_properties["porosity"][1100]))
+
+
+def test_tables_named_like_the_markers_beside_a_class_on_rows_change_nothing(conn: Conn) -> None:
+    """Whoever may create tables in a class's schema could make <table>_shape and <table>_chunk beside its
+    versioned view: the storage is still <table>_ver (the face's trigger is the marker, not the names)."""
+    tgsis.create_feature_class(conn, "layer", "SURFACE", cell_properties=[("porosity", "double precision")])
+    tgsis.enable_feature_versioning(conn)
+    conn.execute("CREATE TABLE public.layer_cellpros_shape (a int)")
+    conn.execute("CREATE TABLE public.layer_cellpros_chunk (a int)")
+    assert conn.execute(
+        "SELECT tgsis.storage_table('public', 'layer_cellpros'), tgsis.stored_in_chunks('public', 'layer_cellpros')"
+    ).fetchone() == ("public.layer_cellpros_ver", False)
+    conn.rollback()
+
+
+def test_the_sql_merge_by_region_writes_property_chunks_as_rows(conn: Conn) -> None:
+    """psql's merge by region (tgsis.merge_mesh_by_region, then tgsis.merge_version): both sides' property edits
+    of one feature read from the chunk versions (merge_property_rows) and written into the version through the
+    face; every view equals the twin class on rows."""
+    for name in TWINS:
+        tgsis.create_feature_class(
+            conn, name, "SURFACE", cell_properties=[("porosity", "double precision"), ("facies", "integer")]
+        )
+    tgsis.enable_feature_versioning(conn)
+    geoids = {name: F.insert_feature(conn, name, _surface()) for name in TWINS}
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    conn.execute("SELECT tgsis.store_class_in_chunks('inchunks')")
+    conn.commit()
+    _each(conn, "e1", "UPDATE {table} SET porosity = '-0' WHERE _geoid = %(g)s AND _idx IN (10, 1100)", geoids)
+    _each(conn, "DEFAULT", "UPDATE {table} SET facies = 77 WHERE _geoid = %(g)s AND _idx = 1300", geoids)
+    conn.execute("SELECT FROM tgsis.find_conflicts('e1')")
+    conn.commit()
+    written = {}
+    for name in TWINS:
+        conn.execute("SET TRANSACTION ISOLATION LEVEL READ COMMITTED")
+        row = conn.execute("SELECT tgsis.merge_mesh_by_region('e1', 'merge', %s)", (geoids[name],)).fetchone()
+        conn.commit()
+        assert row is not None and row[0] is not None, name
+        written[name] = row[0]
+    assert written["inchunks"] > 0
+    conn.execute("SELECT tgsis.merge_version('e1')")
+    conn.commit()
+    views = _twin_views(conn)
+    assert views["inchunks"] == views["onrows"]
+    final = {r[1]: r[2:] for r in _twin_rows(conn, "inchunks")}
+    assert final[10][0] == final[1100][0] == struct.pack(">d", -0.0) and final[1300][1] == 77
