@@ -56,7 +56,7 @@ BEGIN
     ELSE
         EXECUTE format('TRUNCATE %s', v_stage);
     END IF;
-    IF tgsis.calling_role() <> current_user THEN
+    IF tgsis.calling_role() <> current_user AND NOT has_table_privilege(tgsis.calling_role(), v_stage, 'INSERT') THEN
         EXECUTE format('GRANT INSERT ON %s TO %I', v_stage, tgsis.calling_role());
     END IF;
     RETURN v_stage;
