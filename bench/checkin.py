@@ -41,7 +41,8 @@ check-in through its commit; the throwaway cluster runs full_page_writes
 off, so no full-page images), each as a share of the object's bytes
 (target: at most 2 %).
 
-    python bench/checkin.py [--side 1000] [--repeat 3] [--storage chunks|rows]      # TGSIS_PG=system|embedded
+    python bench/checkin.py [--side 1000] [--repeat 3] [--storage chunks|rows] [--write-path client server]
+    # TGSIS_PG=system|embedded; --write-path (chunks): the client's encoding of the touched chunks, the server's, or both
     python bench/checkin.py --bytes [--side 1000] [--storage chunks rows] [--order file spatial]
 """
 
@@ -316,6 +317,19 @@ def bytes_main(side: int, storages: list[str], orders: list[str]) -> None:
         print(f"{name}: {value:.4g}")
 
 
+def use_write_path(path: str) -> None:
+    """Check-ins on chunks write through the client's encoding (``client``) or the server's re-aggregation (``server``).
+
+    The server's path is what the client did before ``tgsis.swap_object_chunks``: the bench switches
+    the private hook of the state writer so that both are timed in one process, under one load.
+    """
+    from tgsis.db import _chunk_write, _state_write
+
+    _state_write.swap_object_rows = (  # type: ignore[assignment]
+        _chunk_write.swap_object_rows if path == "client" else (lambda *args, **kwargs: None)
+    )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--side", type=int, default=1000)
@@ -329,6 +343,14 @@ def main() -> None:
         help="model 1's storage: --bytes measures each (default both), the check-in figures one (default chunks)",
     )
     parser.add_argument("--order", nargs="+", choices=("file", "spatial"), default=["file", "spatial"])
+    parser.add_argument(
+        "--write-path",
+        nargs="+",
+        choices=("client", "server"),
+        default=["client"],
+        help="chunks: who encodes the touched chunks (client: tgsis.swap_object_chunks, the default; server: "
+        "tgsis.write_object_rows); both in one run give the ratio of the two on the same machine load",
+    )
     args = parser.parse_args()
     if args.bytes:
         bytes_main(args.side, args.storage or ["chunks", "rows"], args.order)
@@ -346,11 +368,12 @@ def main() -> None:
         fc = tgsis.create_feature_class(conn, "grid", "SURFACE", cell_properties={"porosity": "float8"})
         conn.commit()
 
-        for versioned in (False, True):
-            label = "versioned" if versioned else "plain"
-            if versioned:
+        for versioned, path in [(v, p) for v in (False, True) for p in args.write_path]:
+            label = ("versioned" if versioned else "plain") + ("" if len(args.write_path) == 1 else f"_{path}")
+            if versioned and path == args.write_path[0]:
                 tgsis.enable_feature_versioning(conn)
                 conn.commit()
+            use_write_path(path)
             edits = [one_percent_edit(base, seed) for seed in range(args.repeat)]
             uploads, checkins, fractions, counted_fractions = [], [], [], []
             for k, edited in enumerate(edits):

@@ -56,6 +56,7 @@ __all__ = [
     "download_tables",
     "chunk_copy_query",
     "split_copy",
+    "split_first_field",
 ]
 
 Conn = psycopg.Connection[Any]
@@ -327,6 +328,47 @@ def split_copy(payload: bytes) -> dict[int, bytes]:
         raise InvalidInputError("binary COPY data ends inside a row") from None
     trailer = b"\xff\xff"
     return {geoid: b"".join([*parts, trailer]) for geoid, parts in pieces.items()}
+
+
+def split_first_field(payload: bytes) -> tuple[list[bytes | None], bytes]:
+    """A binary COPY stream as each row's first field (its raw bytes, None when NULL) and the stream without it.
+
+    For a COPY whose rows start with a value the codec does not read (the place of a chunk version a
+    check-in bases its chunk on), read in the same statement as the chunks themselves.
+
+    Raises
+    ------
+    InvalidInputError
+        Not a binary COPY stream, or one that ends inside a row.
+    """
+    view = memoryview(payload)
+    if bytes(view[:11]) != COPY_SIGNATURE:
+        raise InvalidInputError("not a PostgreSQL binary COPY stream (no PGCOPY signature)")
+    pos = 19 + int.from_bytes(view[15:19], "big")
+    out: list[Any] = [view[:pos]]
+    firsts: list[bytes | None] = []
+    try:
+        while True:
+            count = int.from_bytes(view[pos : pos + 2], "big", signed=True)
+            if count == -1:
+                break
+            if count < 1:
+                raise InvalidInputError("a COPY row without fields")
+            length = int.from_bytes(view[pos + 2 : pos + 6], "big", signed=True)
+            firsts.append(None if length < 0 else bytes(view[pos + 6 : pos + 6 + length]))
+            start = pos + 6 + max(length, 0)
+            pos = start
+            for _ in range(count - 1):
+                length = int.from_bytes(view[pos : pos + 4], "big", signed=True)
+                pos += 4 + max(length, 0)
+            if pos > len(view):
+                raise IndexError
+            out.append((count - 1).to_bytes(2, "big", signed=True))
+            out.append(view[start:pos])
+    except IndexError:
+        raise InvalidInputError("binary COPY data ends inside a row") from None
+    out.append(b"\xff\xff")
+    return firsts, b"".join(out)
 
 
 def _copy_out(conn: Conn, query: sql.Composed) -> bytes:

@@ -26,7 +26,7 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
-from tgsis.db._chunk_write import stored_in_chunks, write_object_rows
+from tgsis.db._chunk_write import stored_in_chunks, swap_object_rows, write_object_rows
 from tgsis.db._cube import box_corners, cube_name
 from tgsis.db._static import SIMPLEX, copy_extra_rows, part_rows
 from tgsis.db._transfer import Storage
@@ -432,24 +432,21 @@ def write_model_rows(
     ``values`` (n, k): the vertices' coordinates (``vrtx``) or the cells'
     vertex ids (a simplex table). An id may be in both (a row rewritten: a
     moved vertex). Rows: ``gone`` deleted (closed, when versioned), then the
-    rows COPied. A table stored in chunks (``tgsis.stored_in_chunks``): one
-    call of ``tgsis.write_object_rows`` for both, each touched chunk rewritten
-    once (:mod:`tgsis.db._chunk_write`). Returns (rows deleted or closed, rows
+    rows COPied. A table stored in chunks (``tgsis.stored_in_chunks``): the
+    touched chunks read, merged and encoded by the client and swapped in by
+    ``tgsis.swap_object_chunks`` (:func:`~tgsis.db._chunk_write.swap_object_rows`),
+    or where that path does not apply one call of ``tgsis.write_object_rows``
+    for both, each touched chunk rewritten once (:mod:`tgsis.db._chunk_write`). Returns (rows deleted or closed, rows
     written), counted alike on both storages.
     """
     gone = np.asarray(gone, dtype=np.int64)
     ids = np.asarray(ids, dtype=np.int64)
     if stored_in_chunks(conn, table):
         vertices = table == "vrtx"
-        write_object_rows(
-            conn,
-            table,
-            geoid,
-            np.setdiff1d(gone, ids),
-            ids,
-            floats=values if vertices else None,
-            refs=None if vertices else values,
-        )
+        edit = (np.setdiff1d(gone, ids), ids, values if vertices else None, None if vertices else values)
+        # the client encodes the touched chunks (tgsis.swap_object_chunks); else the server re-aggregates them
+        if swap_object_rows(conn, table, geoid, *edit) is None:
+            write_object_rows(conn, table, geoid, *edit)
         return len(gone), len(ids)
     deleted = delete_rows(conn, "tgsis", table, "geoid", geoid, idfield, gone)
     if table == "vrtx":

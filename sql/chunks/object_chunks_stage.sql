@@ -1,0 +1,67 @@
+-- tgsis.object_chunks_stage(table): the session's temporary table into which a client COPYs the chunks it encoded for tgsis.swap_object_chunks.
+-- A check-in of a scattered edit touches nearly every chunk of the object;
+-- re-aggregating each in SQL (tgsis.write_chunk_rows) costs 3-5 ms a chunk,
+-- so the client encodes the touched chunks itself (tgsis._chunks, as the
+-- upload does) and sends them in one binary COPY. They go into a temporary
+-- table made here, owned by tgsis's owner (tgsis.swap_object_chunks, a
+-- SECURITY DEFINER function, reads it: a table the calling role made could
+-- not be read by it), with the chunk table's columns that a client's COPY
+-- fills (geoid, chunk, revision, holes, [vbase, vtop], the arrays, [_wide]);
+-- each array compressed as the chunk table compresses it (the swap then
+-- copies the values as they are: compressed once, by the client's COPY);
+-- INSERT on it is granted to the calling role. Made once per session and
+-- table, emptied at each call. Refused by name: a table not stored in chunks
+-- (TG100); a temporary table of that name the session made itself (42501).
+-- Returns the table's name, schema-qualified (pg_temp).
+CREATE FUNCTION tgsis.object_chunks_stage(p_table text)
+RETURNS text
+LANGUAGE plpgsql
+VOLATILE
+SECURITY DEFINER
+SET search_path = pg_catalog, pg_temp
+AS $$
+DECLARE
+    v_stage text;
+    v_cols  text;
+    v_col   record;
+BEGIN
+    IF NOT EXISTS (SELECT FROM tgsis.model_tables t WHERE t.tablename = p_table AND t.chunkcolumn IS NOT NULL)
+       OR NOT tgsis.stored_in_chunks(p_table) THEN
+        RAISE EXCEPTION 'tgsis.% is not stored in chunks', coalesce(quote_ident(p_table), 'NULL')
+            USING ERRCODE = 'TG100',
+                  DETAIL = 'tgsis.object_chunks_stage stages chunks of the model tables switched to chunks (tgsis.stored_in_chunks).',
+                  HINT = 'write the rows of a table stored as rows through its view or storage';
+    END IF;
+    v_stage := format('pg_temp.%I', 'tgsis_object_chunks_' || p_table);
+    IF to_regclass(v_stage) IS NULL THEN
+        v_cols := array_to_string(ARRAY['geoid', 'chunk', 'revision', 'holes']
+                                  || CASE WHEN EXISTS (SELECT FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref')
+                                          THEN ARRAY['vbase', 'vtop'] ELSE '{}'::text[] END
+                                  || ARRAY(SELECT quote_ident(c.name) FROM tgsis.chunk_columns(p_table) c
+                                            WHERE c.role IN ('float', 'ref') ORDER BY c.colorder)
+                                  || ARRAY(SELECT quote_ident(c.name || '_wide') FROM tgsis.chunk_columns(p_table) c
+                                            WHERE c.role = 'ref' ORDER BY c.colorder), ', ');
+        EXECUTE format('CREATE TEMP TABLE %s AS SELECT %s FROM %s WITH NO DATA', v_stage, v_cols, tgsis.chunk_table_of(p_table));
+        -- each array compressed as the chunk table compresses it: the swap then copies the compressed values as they are
+        FOR v_col IN SELECT a.attname, a.attcompression FROM pg_attribute a
+                      WHERE a.attrelid = tgsis.chunk_table_of(p_table) AND a.attnum > 0 AND NOT a.attisdropped
+                        AND a.attcompression <> '' AND quote_ident(a.attname) = ANY (string_to_array(v_cols, ', ')) LOOP
+            EXECUTE format('ALTER TABLE %s ALTER COLUMN %I SET COMPRESSION %s', v_stage, v_col.attname,
+                           CASE v_col.attcompression WHEN 'l' THEN 'lz4' ELSE 'pglz' END);
+        END LOOP;
+    ELSIF (SELECT c.relowner FROM pg_class c WHERE c.oid = to_regclass(v_stage))
+          <> (SELECT r.oid FROM pg_roles r WHERE r.rolname = current_user) THEN
+        RAISE EXCEPTION 'the session''s table % was not made by tgsis.object_chunks_stage', v_stage
+            USING ERRCODE = 'insufficient_privilege', HINT = 'drop the temporary table and write again';
+    ELSE
+        EXECUTE format('TRUNCATE %s', v_stage);
+    END IF;
+    IF tgsis.calling_role() <> current_user AND NOT has_table_privilege(tgsis.calling_role(), v_stage, 'INSERT') THEN
+        EXECUTE format('GRANT INSERT ON %s TO %I', v_stage, tgsis.calling_role());
+    END IF;
+    RETURN v_stage;
+END
+$$;
+
+COMMENT ON FUNCTION tgsis.object_chunks_stage(text) IS
+    'the session''s temporary table (owned by tgsis''s owner, INSERT granted to the calling role, emptied) into which a client COPYs the chunk versions it encoded for tgsis.swap_object_chunks; returns its name';
