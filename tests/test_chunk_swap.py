@@ -160,6 +160,43 @@ def test_a_writer_between_read_and_swap_is_not_overwritten(
     conn.commit()
 
 
+@pytest.mark.parametrize("versioned", [False, True], ids=["plain", "versioned"])
+def test_a_check_in_that_loses_the_race_merges_as_the_server_does(
+    conn: Conn, db_dsn: str, monkeypatch: pytest.MonkeyPatch, versioned: bool
+) -> None:
+    """The writer of a check-in (``_state_write.write_model_rows``) swaps; when the swap loses the race, it merges.
+
+    A psql user's write through the face between the client's read and the swap
+    must neither be lost nor make the check-in fail: the edit then goes through
+    ``tgsis.write_object_rows`` (in the savepoint's place), which keeps both.
+    Fails when the TG300 reaches the caller, or when the other write is lost.
+    """
+    from tgsis.db import _state_write
+    from tgsis.db._transfer import Storage
+    from tgsis.db.classes import get_feature_class
+
+    a, _ = _objects(conn, versioned)
+    fc = get_feature_class(conn, "horizons")
+
+    def other_writer() -> None:
+        with psycopg.connect(db_dsn) as session:
+            session.execute("UPDATE tgsis.vrtx SET x = 9.0 WHERE geoid = %s AND vrtxid = 1030", (a,))
+            session.commit()
+
+    _with_writer_between(monkeypatch, other_writer)
+    _state_write.write_model_rows(
+        conn, Storage.of(conn, fc), "vrtx", "vrtxid", a, np.array([7]), np.array([1031, N + 6]), np.ones((2, 3))
+    )
+    conn.commit()
+    monkeypatch.undo()
+    face = "SELECT vrtxid, x, y, z FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = ANY (%s) ORDER BY 1"
+    after = {r[0]: list(r[1:]) for r in conn.execute(face, (a, [7, 1030, 1031, N + 6])).fetchall()}
+    conn.commit()
+    assert after[1030][0] == 9.0  # the other writer's value is kept
+    assert after[1031] == [1.0, 1.0, 1.0] and after[N + 6] == [1.0, 1.0, 1.0]  # and the check-in's edit written
+    assert 7 not in after
+
+
 def test_roles_and_a_tampered_stage(conn: Conn, db_dsn: str) -> None:
     """An editor swaps through the stage; a role without DELETE falls back (and is refused the swap); bad chunks refused."""
     a, b = _objects(conn, True)

@@ -417,6 +417,25 @@ def copy_cell_rows(
     return len(ids)
 
 
+def _swapped(conn: Conn, table: str, geoid: int, edit: tuple[Any, ...]) -> int | None:
+    """:func:`~tgsis.db._chunk_write.swap_object_rows` in a savepoint; None when it does not apply or lost a race.
+
+    A chunk another transaction wrote between the client's read and the swap
+    (a psql user's write through the face) makes the swap refuse (TG300,
+    nothing written): the edit then goes through ``tgsis.write_object_rows``,
+    which merges it into the chunks as they are now, as a check-in on rows
+    or before the client path did; the same checks raise there what is a
+    real refusal.
+    """
+    try:
+        with conn.transaction():
+            return swap_object_rows(conn, table, geoid, *edit)
+    except psycopg.Error as error:
+        if error.sqlstate != "TG300":
+            raise
+        return None
+
+
 def write_model_rows(
     conn: Conn,
     storage: Storage,
@@ -445,7 +464,7 @@ def write_model_rows(
         vertices = table == "vrtx"
         edit = (np.setdiff1d(gone, ids), ids, values if vertices else None, None if vertices else values)
         # the client encodes the touched chunks (tgsis.swap_object_chunks); else the server re-aggregates them
-        if swap_object_rows(conn, table, geoid, *edit) is None:
+        if _swapped(conn, table, geoid, edit) is None:
             write_object_rows(conn, table, geoid, *edit)
         return len(gone), len(ids)
     deleted = delete_rows(conn, "tgsis", table, "geoid", geoid, idfield, gone)
