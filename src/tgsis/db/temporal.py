@@ -25,7 +25,7 @@ from psycopg import sql
 from tgsis._series import check_time
 from tgsis.arguments import checked
 from tgsis.db._temporal_common import Conn, assemble_surface, get_at, lifespan, time_args
-from tgsis.db._transfer import class_name, copy_out, read_only_snapshot, resolve_class, rows_by_geoid
+from tgsis.db._transfer import class_name, copy_out, packed_out, read_only_snapshot, resolve_class, rows_by_geoid
 from tgsis.db.classes import FeatureClass
 from tgsis.db.evolving import append_period, delete_period, fetch_evolving, insert_evolving
 from tgsis.db.instants import add_instant, delete_instant, fetch_series, insert_series
@@ -111,21 +111,23 @@ def surfaces_at(
             conn.execute("SELECT geoid, geoname FROM tgsis.geometry WHERE geoid = ANY (%s)", (alive,)).fetchall()
         )
         wanted = sql.Literal(alive)
-        vg, vid, x, y, z = copy_out(
+        vg, vid, x, y, z = packed_out(
             conn,
             sql.SQL(
                 "SELECT f.geoid, v.vrtxid, v.x, v.y, v.z FROM unnest({}::bigint[]) AS f(geoid), "
                 "LATERAL tgsis.vertices_at(f.geoid, {}, {}) v"
             ).format(wanted, t_lit, c_lit),
-            ["int8", "int8", "float8", "float8", "float8"],
+            [("geoid", "int8"), ("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")],
+            ["geoid", "vrtxid"],
         )
-        tg, tid, a, b, c = copy_out(
+        tg, tid, a, b, c = packed_out(
             conn,
             sql.SQL(
                 "SELECT f.geoid, c.trglid, c.vrtxid1, c.vrtxid2, c.vrtxid3 FROM unnest({}::bigint[]) AS f(geoid), "
                 "LATERAL tgsis.triangles_at(f.geoid, {}, {}) c"
             ).format(wanted, t_lit, c_lit),
-            ["int8", "int8", "int8", "int8", "int8"],
+            [("geoid", "int8"), ("trglid", "int8"), ("vrtxid1", "int8"), ("vrtxid2", "int8"), ("vrtxid3", "int8")],
+            ["geoid", "trglid"],
         )
     vertex_rows = rows_by_geoid(vg, vid, alive) if alive else {}
     triangle_rows = rows_by_geoid(tg, tid, alive) if alive else {}
