@@ -23,6 +23,7 @@ from tests.temporal_data import evolving, series
 from tgsis.db import _transfer
 from tgsis.db.copy import encode_rows
 from tgsis.errors import DatabaseError
+from tgsis.temporal import EvolvingSurface, TopologyPeriod
 
 Conn = psycopg.Connection[Any]
 
@@ -120,3 +121,45 @@ def test_snapshots_spanning_many_groups_are_bit_exact(tx: Conn, monkeypatch: pyt
     assert sorted(both) == sorted([fid, oid])
     _same(both[fid], fault.at(0.4))
     _same(both[oid], other.at(0.4))
+
+
+@pytest.mark.parametrize("bits", [2, 10])
+def test_whole_features_of_models_2_and_3_come_back_bit_exact(
+    tx: Conn, monkeypatch: pytest.MonkeyPatch, bits: int
+) -> None:
+    """fetch_evolving / fetch_series read the geometry and property rows packed and order them on the client."""
+    monkeypatch.setattr(_transfer, "PACKED_GROUP_BITS", bits)
+    fault = evolving(np.random.default_rng(21), [0.0, 2.0], instants_per_period=3, side=9, with_properties=True)
+    first = fault.periods[0]
+    positions = first.positions.copy()
+    positions.reshape(-1)[1 : 1 + len(_SPECIAL) - 2] = _SPECIAL[[0, 3]].view(np.float64)  # -0.0, a subnormal
+    fault = EvolvingSurface([TopologyPeriod(first.times, first.triangles, positions,
+                                            vertex_properties=first.vertex_properties, properties=first.properties),
+                             *fault.periods[1:]], name="packed")  # fmt: skip
+    horizon = series(np.random.default_rng(22), [0.0, 1.0, 2.5, 4.0], with_properties=True)
+    tgsis.create_feature_class(
+        tx, "faults", "SURFACE", time_model="EVOLVING", cell_properties=[("porosity", "float8")],
+        instant_properties=[("throw", "float8"), ("note_code", "integer")],
+    )  # fmt: skip
+    tgsis.create_feature_class(
+        tx, "horizons", "SURFACE", time_model="INSTANTS", cell_properties=[("porosity", "float8")],
+        instant_properties=[("throw", "float8")],
+    )  # fmt: skip
+    fid = tgsis.insert_feature(tx, "faults", fault)
+    hid = tgsis.insert_feature(tx, "horizons", horizon, drop_extra_properties=True)
+    back = tgsis.fetch_evolving(tx, "faults", fid)
+    assert len(back.periods) == len(fault.periods)
+    for got, sent in zip(back.periods, fault.periods):
+        np.testing.assert_array_equal(_bits(got.times), _bits(sent.times))
+        np.testing.assert_array_equal(got.triangles, sent.triangles)
+        np.testing.assert_array_equal(_bits(got.positions), _bits(sent.positions))
+        np.testing.assert_array_equal(
+            _bits(got.vertex_properties["porosity"]), _bits(sent.vertex_properties["porosity"])
+        )
+    steps = tgsis.fetch_series(tx, "horizons", hid)
+    np.testing.assert_array_equal(steps.times, horizon.times)
+    for got_surface, sent_surface in zip(steps.surfaces, horizon.surfaces):
+        _same(got_surface, sent_surface)
+        np.testing.assert_array_equal(
+            _bits(got_surface.vertex_properties["porosity"]), _bits(sent_surface.vertex_properties["porosity"])
+        )

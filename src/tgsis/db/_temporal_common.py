@@ -21,9 +21,9 @@ from psycopg import sql
 
 from tgsis._series import check_time
 from tgsis.arguments import checked, no_nul
-from tgsis.db._transfer import copy_out, local_positions, packed_out, resolve_class, rows_by_geoid
+from tgsis.db._transfer import SEND_FUNCTIONS, copy_out, local_positions, packed_out, resolve_class, rows_by_geoid
 from tgsis.db.classes import FeatureClass, class_of_feature
-from tgsis.db.copy import SQL_TYPES, numpy_dtype
+from tgsis.db.copy import SQL_TYPES, numpy_dtype, wire_shape
 from tgsis.drawing import Drawable, drawable
 from tgsis.errors import InvalidInputError, InvalidPropertyError, NotFoundError, reraise
 from tgsis.mesh import Surface
@@ -115,9 +115,35 @@ def insert_instant_properties(
 
 
 def ordered_copy(
-    conn: Conn, table: sql.Composable, columns: Sequence[str], types: Sequence[str], geoid: int, key: str = "geoid"
+    conn: Conn,
+    table: sql.Composable,
+    columns: Sequence[str],
+    types: Sequence[str],
+    geoid: int,
+    key: str = "geoid",
+    *,
+    keys: int = 0,
 ) -> list[npt.NDArray[Any]]:
-    """Binary COPY of ``columns`` of one geometry's rows, ordered by those columns' leading keys."""
+    """The ``columns`` of one geometry's rows, ordered by those columns' leading keys.
+
+    With ``keys`` = k > 0, the first k columns are the rows' key (unique in
+    the geometry), the k-th a local id (``int8``): the rows come packed by
+    the server in groups of ids (:func:`~tgsis.db._transfer.packed_out`, not
+    a COPY message per row) and are ordered here. Otherwise (or when a
+    column has no fixed-width send form) a binary COPY ordered by the server.
+    """
+    if keys and types[keys - 1] == "int8" and all(wire_shape(w)[0] in SEND_FUNCTIONS for w in types):
+        values = packed_out(
+            conn,
+            sql.SQL("SELECT {} FROM {} WHERE {} = {}").format(
+                sql.SQL(", ").join(sql.Identifier(c) for c in columns), table, sql.Identifier(key), sql.Literal(geoid)
+            ),
+            list(zip(columns, types)),
+            [columns[keys - 1]],
+            columns[: keys - 1],
+        )
+        order = np.lexsort(values[keys - 1 :: -1])
+        return [v[order] for v in values]
     names = sql.SQL(", ").join(sql.Identifier(c) for c in columns)
     return copy_out(
         conn,

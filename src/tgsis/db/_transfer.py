@@ -499,7 +499,11 @@ PACKED_GROUP_BITS = 10
 
 
 def packed_out(
-    conn: Conn, query: sql.Composable, columns: Sequence[tuple[str, str]], keys: Sequence[str]
+    conn: Conn,
+    query: sql.Composable,
+    columns: Sequence[tuple[str, str]],
+    keys: Sequence[str],
+    exact: Sequence[str] = (),
 ) -> list[npt.NDArray[Any]]:
     """The rows of a query, as columns, sent by the server packed in groups of rows, not one COPY message per row.
 
@@ -522,6 +526,8 @@ def packed_out(
         The columns returned, as (name, wire type: ``int8``, ``float8``, ...).
     keys : sequence of str
         Integer columns of the query (usually the geoid and the local id) that group its rows.
+    exact : sequence of str
+        Columns of the query that group its rows by their values (an instant ``times``), before ``keys``.
 
     Returns
     -------
@@ -544,7 +550,10 @@ def packed_out(
         row=sql.SQL(" || ").join(sends),
         query=query,
         groups=sql.SQL(", ").join(
-            sql.SQL("q.{} >> {}").format(sql.Identifier(k), sql.Literal(PACKED_GROUP_BITS)) for k in keys
+            [
+                *(sql.SQL("q.{}").format(sql.Identifier(k)) for k in exact),
+                *(sql.SQL("q.{} >> {}").format(sql.Identifier(k), sql.Literal(PACKED_GROUP_BITS)) for k in keys),
+            ]
         ),
     )
     groups = conn.execute(statement, binary=True).fetchall()

@@ -9,7 +9,8 @@ tables: docs/data-models.md).
 
 Here are the questions over time both models (and static surfaces) answer. Snapshots at t are
 computed in SQL by ``tgsis.vertices_at`` / ``tgsis.triangles_at`` and
-downloaded with binary COPY (:func:`get_at`, :func:`surfaces_at`).
+downloaded packed by the server in groups of rows (:func:`get_at`,
+:func:`surfaces_at`; ``tgsis.db._transfer.packed_out``).
 :func:`export_series` writes snapshots at several times as a ParaView
 ``.pvd`` time series (the numpy side is :func:`tgsis.temporal.write_series_pvd`).
 """
