@@ -163,3 +163,22 @@ def test_whole_features_of_models_2_and_3_come_back_bit_exact(
         np.testing.assert_array_equal(
             _bits(got_surface.vertex_properties["porosity"]), _bits(sent_surface.vertex_properties["porosity"])
         )
+
+
+def test_first_times_come_back_ascending_whatever_the_groups(tx: Conn, monkeypatch: pytest.MonkeyPatch) -> None:
+    """first_times reads packed (groups come in any order) and orders by id: as the SQL function's ORDER BY."""
+    fault = evolving(np.random.default_rng(31), [0.0, 2.0], instants_per_period=4, side=9, with_properties=True)
+    tgsis.create_feature_class(
+        tx, "faults", "SURFACE", time_model="EVOLVING", cell_properties=[("porosity", "float8")],
+        instant_properties=[("throw", "float8"), ("note_code", "integer")],
+    )  # fmt: skip
+    fid = tgsis.insert_feature(tx, "faults", fault)
+    expected = tx.execute(
+        "SELECT idx, t FROM tgsis.first_time('faults', %s, 'porosity', '>', 0.2, 'left')", (fid,)
+    ).fetchall()
+    assert len(expected) > 100
+    for bits in (0, 10):  # one id a group: the groups come in the hash's order
+        monkeypatch.setattr(_transfer, "PACKED_GROUP_BITS", bits)
+        idx, t = tgsis.first_times(tx, "faults", fid, "porosity", ">", 0.2)
+        assert idx.tolist() == [r[0] for r in expected]
+        np.testing.assert_array_equal(_bits(t), _bits(np.array([r[1] for r in expected])))

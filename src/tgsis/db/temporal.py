@@ -26,7 +26,7 @@ from psycopg import sql
 from tgsis._series import check_time
 from tgsis.arguments import checked
 from tgsis.db._temporal_common import Conn, assemble_surface, get_at, lifespan, time_args
-from tgsis.db._transfer import class_name, copy_out, packed_out, read_only_snapshot, resolve_class, rows_by_geoid
+from tgsis.db._transfer import class_name, packed_out, read_only_snapshot, resolve_class, rows_by_geoid
 from tgsis.db.classes import FeatureClass
 from tgsis.db.evolving import append_period, delete_period, fetch_evolving, insert_evolving
 from tgsis.db.instants import add_instant, delete_instant, fetch_series, insert_series
@@ -320,8 +320,8 @@ def first_times(
 ) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64]]:
     """For each vertex/node or cell of a feature, the first time its property satisfies ``prop op value``.
 
-    Computed in SQL by ``tgsis.first_time`` and downloaded with one binary
-    COPY into two arrays (for a million cells a dict would cost more than
+    Computed in SQL by ``tgsis.first_time`` and downloaded packed
+    (``packed_out``) into two arrays (for a million cells a dict would cost more than
     the query). The first time is the infimum of the times at which the
     condition holds (it may hold only right after it): model 2 stepwise,
     left-closed the instant ``t_i`` itself, right-closed the instant before it
@@ -358,8 +358,10 @@ def first_times(
         sql.Literal(check_convention(convention)),
     )
     with reraise(), conn.transaction():
-        idx, t = copy_out(conn, query, ["int8", "float8"])
-    return idx, t
+        # packed by the server in groups of ids (not a COPY message per cell), ordered here
+        idx, t = packed_out(conn, query, [("idx", "int8"), ("t", "float8")], ["idx"])
+    order = np.argsort(idx, kind="stable")
+    return idx[order], t[order]
 
 
 @checked
