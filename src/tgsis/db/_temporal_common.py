@@ -21,9 +21,9 @@ from psycopg import sql
 
 from tgsis._series import check_time
 from tgsis.arguments import checked, no_nul
-from tgsis.db._transfer import copy_out, local_positions, resolve_class, rows_by_geoid
+from tgsis.db._transfer import SEND_FUNCTIONS, copy_out, local_positions, packed_out, resolve_class, rows_by_geoid
 from tgsis.db.classes import FeatureClass, class_of_feature
-from tgsis.db.copy import SQL_TYPES, numpy_dtype
+from tgsis.db.copy import SQL_TYPES, numpy_dtype, wire_shape
 from tgsis.drawing import Drawable, drawable
 from tgsis.errors import InvalidInputError, InvalidPropertyError, NotFoundError, reraise
 from tgsis.mesh import Surface
@@ -115,9 +115,35 @@ def insert_instant_properties(
 
 
 def ordered_copy(
-    conn: Conn, table: sql.Composable, columns: Sequence[str], types: Sequence[str], geoid: int, key: str = "geoid"
+    conn: Conn,
+    table: sql.Composable,
+    columns: Sequence[str],
+    types: Sequence[str],
+    geoid: int,
+    key: str = "geoid",
+    *,
+    keys: int = 0,
 ) -> list[npt.NDArray[Any]]:
-    """Binary COPY of ``columns`` of one geometry's rows, ordered by those columns' leading keys."""
+    """The ``columns`` of one geometry's rows, ordered by those columns' leading keys.
+
+    With ``keys`` = k > 0, the first k columns are the rows' key (unique in
+    the geometry), the k-th a local id (``int8``): the rows come packed by
+    the server in groups of ids (:func:`~tgsis.db._transfer.packed_out`, not
+    a COPY message per row) and are ordered here. Otherwise (or when a
+    column has no fixed-width send form) a binary COPY ordered by the server.
+    """
+    if keys and types[keys - 1] == "int8" and all(wire_shape(w)[0] in SEND_FUNCTIONS for w in types):
+        values = packed_out(
+            conn,
+            sql.SQL("SELECT {} FROM {} WHERE {} = {}").format(
+                sql.SQL(", ").join(sql.Identifier(c) for c in columns), table, sql.Identifier(key), sql.Literal(geoid)
+            ),
+            list(zip(columns, types)),
+            [columns[keys - 1]],
+            columns[: keys - 1],
+        )
+        order = np.lexsort(values[keys - 1 :: -1])
+        return [v[order] for v in values]
     names = sql.SQL(", ").join(sql.Identifier(c) for c in columns)
     return copy_out(
         conn,
@@ -229,16 +255,19 @@ def _properties_at(
     for prop in fc.cell_properties:
         if prop.type not in _NUMERIC or prop.size != 1 or prop.alignment not in (None, fc.alignment):
             continue  # booleans, vectors and the other alignment's properties have no interpolated value here
-        idx, value = copy_out(
+        idx, value = packed_out(
             conn,
-            sql.SQL("SELECT idx, coalesce(value, 'NaN') FROM tgsis.property_at({}, {}, {}, {}, {})").format(
+            sql.SQL(
+                "SELECT idx, coalesce(value, 'NaN')::float8 AS value FROM tgsis.property_at({}, {}, {}, {}, {})"
+            ).format(
                 sql.Literal(fc.name),
                 sql.Literal(feature_id),
                 sql.Literal(prop.name),
                 sql.Literal(float(t)),
                 sql.Literal(convention),
             ),
-            ["int8", "float8"],
+            [("idx", "int8"), ("value", "float8")],
+            ["idx"],
         )
         values = np.full(len(ids), np.nan)
         if len(ids):
@@ -284,21 +313,24 @@ def get_at(
         if not row[0]:
             return None
         with _without_jit(conn):
-            ids, x, y, z = copy_out(
+            # packed by the server in groups of 1,024 ids (packed_out): a COPY message per row
+            # cost most of the snapshot's time
+            ids, x, y, z = packed_out(
                 conn,
                 sql.SQL("SELECT vrtxid, x, y, z FROM tgsis.vertices_at({}, {}, {})").format(
                     sql.Literal(feature_id), t_lit, c_lit
                 ),
-                ["int8", "float8", "float8", "float8"],
+                [("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")],
+                ["vrtxid"],
             )
-            # ordered by trglid here, not by the server: a sort of every triangle there (on disk
-            # past work_mem) where the rows mostly come in stored order already
-            tid, a, b, c = copy_out(
+            # ordered by trglid here, not by the server: the rows come in no order
+            tid, a, b, c = packed_out(
                 conn,
                 sql.SQL("SELECT trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.triangles_at({}, {}, {})").format(
                     sql.Literal(feature_id), t_lit, c_lit
                 ),
-                ["int8", "int8", "int8", "int8"],
+                [("trglid", "int8"), ("vrtxid1", "int8"), ("vrtxid2", "int8"), ("vrtxid3", "int8")],
+                ["trglid"],
             )
     order = rows_by_geoid(tid, tid, [feature_id])[feature_id]
     surface = assemble_surface(feature_id, ids, (x, y, z), (a[order], b[order], c[order]), row[1])

@@ -424,6 +424,7 @@ def fetch_evolving(conn: Conn, feature_class: str | FeatureClass, feature_id: in
             ["timem", "trglid", "nodeid1", "nodeid2", "nodeid3"],
             ["float8", "int8", "int8", "int8", "int8"],
             feature_id,
+            keys=2,
         )
         vm, vt, nid, x, y, z = ordered_copy(
             conn,
@@ -431,6 +432,7 @@ def fetch_evolving(conn: Conn, feature_class: str | FeatureClass, feature_id: in
             ["timem", "timet", "nodeid", "x", "y", "z"],
             ["float8", "float8", "int8", "float8", "float8", "float8"],
             feature_id,
+            keys=3,
         )
         props = (
             ordered_copy(
@@ -440,6 +442,7 @@ def fetch_evolving(conn: Conn, feature_class: str | FeatureClass, feature_id: in
                 ["float8", "float8", "int8", *types],
                 feature_id,
                 "_geoid",
+                keys=3,
             )
             if names
             else []

@@ -289,6 +289,7 @@ def fetch_series(conn: Conn, feature_class: str | FeatureClass, feature_id: int)
             ["times", "vrtxid", "x", "y", "z"],
             ["float8", "int8", "float8", "float8", "float8"],
             feature_id,
+            keys=2,
         )
         tt, tid, a, b, c = ordered_copy(
             conn,
@@ -296,6 +297,7 @@ def fetch_series(conn: Conn, feature_class: str | FeatureClass, feature_id: int)
             ["times", "trglid", "vrtxid1", "vrtxid2", "vrtxid3"],
             ["float8", "int8", "int8", "int8", "int8"],
             feature_id,
+            keys=2,
         )
         props = (
             ordered_copy(
@@ -305,6 +307,7 @@ def fetch_series(conn: Conn, feature_class: str | FeatureClass, feature_id: int)
                 ["float8", "int8", *types],
                 feature_id,
                 "_geoid",
+                keys=2,
             )
             if names
             else []

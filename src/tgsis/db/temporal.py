@@ -9,7 +9,8 @@ tables: docs/data-models.md).
 
 Here are the questions over time both models (and static surfaces) answer. Snapshots at t are
 computed in SQL by ``tgsis.vertices_at`` / ``tgsis.triangles_at`` and
-downloaded with binary COPY (:func:`get_at`, :func:`surfaces_at`).
+downloaded packed by the server in groups of rows (:func:`get_at`,
+:func:`surfaces_at`; ``tgsis.db._transfer.packed_out``).
 :func:`export_series` writes snapshots at several times as a ParaView
 ``.pvd`` time series (the numpy side is :func:`tgsis.temporal.write_series_pvd`).
 """
@@ -25,7 +26,7 @@ from psycopg import sql
 from tgsis._series import check_time
 from tgsis.arguments import checked
 from tgsis.db._temporal_common import Conn, assemble_surface, get_at, lifespan, time_args
-from tgsis.db._transfer import class_name, copy_out, read_only_snapshot, resolve_class, rows_by_geoid
+from tgsis.db._transfer import class_name, packed_out, read_only_snapshot, resolve_class, rows_by_geoid
 from tgsis.db.classes import FeatureClass
 from tgsis.db.evolving import append_period, delete_period, fetch_evolving, insert_evolving
 from tgsis.db.instants import add_instant, delete_instant, fetch_series, insert_series
@@ -111,21 +112,23 @@ def surfaces_at(
             conn.execute("SELECT geoid, geoname FROM tgsis.geometry WHERE geoid = ANY (%s)", (alive,)).fetchall()
         )
         wanted = sql.Literal(alive)
-        vg, vid, x, y, z = copy_out(
+        vg, vid, x, y, z = packed_out(
             conn,
             sql.SQL(
                 "SELECT f.geoid, v.vrtxid, v.x, v.y, v.z FROM unnest({}::bigint[]) AS f(geoid), "
                 "LATERAL tgsis.vertices_at(f.geoid, {}, {}) v"
             ).format(wanted, t_lit, c_lit),
-            ["int8", "int8", "float8", "float8", "float8"],
+            [("geoid", "int8"), ("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")],
+            ["geoid", "vrtxid"],
         )
-        tg, tid, a, b, c = copy_out(
+        tg, tid, a, b, c = packed_out(
             conn,
             sql.SQL(
                 "SELECT f.geoid, c.trglid, c.vrtxid1, c.vrtxid2, c.vrtxid3 FROM unnest({}::bigint[]) AS f(geoid), "
                 "LATERAL tgsis.triangles_at(f.geoid, {}, {}) c"
             ).format(wanted, t_lit, c_lit),
-            ["int8", "int8", "int8", "int8", "int8"],
+            [("geoid", "int8"), ("trglid", "int8"), ("vrtxid1", "int8"), ("vrtxid2", "int8"), ("vrtxid3", "int8")],
+            ["geoid", "trglid"],
         )
     vertex_rows = rows_by_geoid(vg, vid, alive) if alive else {}
     triangle_rows = rows_by_geoid(tg, tid, alive) if alive else {}
@@ -317,8 +320,8 @@ def first_times(
 ) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.float64]]:
     """For each vertex/node or cell of a feature, the first time its property satisfies ``prop op value``.
 
-    Computed in SQL by ``tgsis.first_time`` and downloaded with one binary
-    COPY into two arrays (for a million cells a dict would cost more than
+    Computed in SQL by ``tgsis.first_time`` and downloaded packed
+    (``packed_out``) into two arrays (for a million cells a dict would cost more than
     the query). The first time is the infimum of the times at which the
     condition holds (it may hold only right after it): model 2 stepwise,
     left-closed the instant ``t_i`` itself, right-closed the instant before it
@@ -355,8 +358,10 @@ def first_times(
         sql.Literal(check_convention(convention)),
     )
     with reraise(), conn.transaction():
-        idx, t = copy_out(conn, query, ["int8", "float8"])
-    return idx, t
+        # packed by the server in groups of ids (not a COPY message per cell), ordered here
+        idx, t = packed_out(conn, query, [("idx", "int8"), ("t", "float8")], ["idx"])
+    order = np.argsort(idx, kind="stable")
+    return idx[order], t[order]
 
 
 @checked
