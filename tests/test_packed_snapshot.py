@@ -182,3 +182,72 @@ def test_first_times_come_back_ascending_whatever_the_groups(tx: Conn, monkeypat
         idx, t = tgsis.first_times(tx, "faults", fid, "porosity", ">", 0.2)
         assert idx.tolist() == [r[0] for r in expected]
         np.testing.assert_array_equal(_bits(t), _bits(np.array([r[1] for r in expected])))
+
+
+@pytest.mark.parametrize("model", ["EVOLVING", "INSTANTS"])
+def test_a_snapshot_is_of_one_state_whatever_commits_between_its_reads(
+    conn: Conn, db_dsn: str, monkeypatch: pytest.MonkeyPatch, model: str
+) -> None:
+    """get_at reads vertices, triangles and properties in several statements: all of one state.
+
+    Another session commits a change to the feature's triangles and vertex
+    properties after get_at read its vertices. The snapshot must be the surface
+    as it was before that commit, not its vertices with the new triangles.
+    Fails when the reads run in a READ COMMITTED transaction (each statement
+    its own snapshot).
+    """
+    from tgsis.db import _temporal_common
+    from tgsis.db.classes import get_feature_class
+
+    rng = np.random.default_rng(41)
+    if model == "EVOLVING":
+        surface: Any = evolving(rng, [0.0], instants_per_period=2, side=5, with_properties=True)
+        triangles, corner = "d4dtrgl", "nodeid"
+    else:
+        surface = series(rng, [0.0, 1.0], with_properties=True)
+        triangles, corner = "times_trgl", "vrtxid"
+    tgsis.create_feature_class(
+        conn, "faults", "SURFACE", time_model=model, cell_properties=[("porosity", "float8")],
+        instant_properties=[("throw", "float8"), ("note_code", "integer")],
+    )  # fmt: skip
+    fid = tgsis.insert_feature(conn, "faults", surface, drop_extra_properties=True)
+    fc = get_feature_class(conn, "faults")
+    conn.commit()
+    before = tgsis.get_at(conn, fid, 0.0, properties=True)
+    conn.commit()
+    assert before is not None
+    reads = []
+    packed = _temporal_common.packed_out
+
+    def read_then_commit_another_change(*args: Any, **kwargs: Any) -> Any:
+        result = packed(*args, **kwargs)
+        reads.append(1)
+        if len(reads) == 1:  # the vertices are read: another session changes the rest
+            with psycopg.connect(db_dsn) as other:
+                other.execute(
+                    sql.SQL("UPDATE {} SET {a} = {b}, {b} = {a} WHERE geoid = %s").format(
+                        sql.Identifier("tgsis", triangles),
+                        a=sql.Identifier(corner + "1"),
+                        b=sql.Identifier(corner + "2"),
+                    ),
+                    (fid,),
+                )
+                other.execute(
+                    sql.SQL("UPDATE {} SET porosity = -1 WHERE _geoid = %s").format(
+                        sql.Identifier(fc.schema, fc.cellprotable)
+                    ),
+                    (fid,),
+                )
+        return result
+
+    monkeypatch.setattr(_temporal_common, "packed_out", read_then_commit_another_change)
+    got = tgsis.get_at(conn, fid, 0.0, properties=True)
+    conn.commit()
+    assert len(reads) >= 2
+    assert got is not None
+    _same(got, before)
+    np.testing.assert_array_equal(_bits(got.vertex_properties["porosity"]), _bits(before.vertex_properties["porosity"]))
+    monkeypatch.undo()
+    after = tgsis.get_at(conn, fid, 0.0, properties=True)
+    conn.commit()
+    assert after is not None and not np.array_equal(after.triangles, before.triangles)  # the change was made

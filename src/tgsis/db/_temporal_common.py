@@ -21,7 +21,15 @@ from psycopg import sql
 
 from tgsis._series import check_time
 from tgsis.arguments import checked, no_nul
-from tgsis.db._transfer import SEND_FUNCTIONS, copy_out, local_positions, packed_out, resolve_class, rows_by_geoid
+from tgsis.db._transfer import (
+    SEND_FUNCTIONS,
+    copy_out,
+    local_positions,
+    packed_out,
+    read_only_snapshot,
+    resolve_class,
+    rows_by_geoid,
+)
 from tgsis.db.classes import FeatureClass, class_of_feature
 from tgsis.db.copy import SQL_TYPES, numpy_dtype, wire_shape
 from tgsis.drawing import Drawable, drawable
@@ -299,7 +307,7 @@ def get_at(
         NaN time or an unknown convention.
     """
     t_lit, c_lit = time_args(t, convention)
-    with reraise(), conn.transaction():
+    with reraise(), read_only_snapshot(conn):  # vertices, triangles and properties of one state
         row = conn.execute(
             sql.SQL("SELECT tgsis.exists_at(%s, {}, {}), geoname, geotype FROM tgsis.geometry WHERE geoid = %s").format(
                 t_lit, c_lit
@@ -332,10 +340,9 @@ def get_at(
                 [("trglid", "int8"), ("vrtxid1", "int8"), ("vrtxid2", "int8"), ("vrtxid3", "int8")],
                 ["trglid"],
             )
-    order = rows_by_geoid(tid, tid, [feature_id])[feature_id]
-    surface = assemble_surface(feature_id, ids, (x, y, z), (a[order], b[order], c[order]), row[1])
-    if properties:
-        with reraise(), conn.transaction():
+        order = rows_by_geoid(tid, tid, [feature_id])[feature_id]
+        surface = assemble_surface(feature_id, ids, (x, y, z), (a[order], b[order], c[order]), row[1])
+        if properties:
             _properties_at(conn, surface, feature_id, t, convention, np.sort(ids), tid[order])
     return surface
 

@@ -43,7 +43,14 @@ from tgsis.db._temporal_common import (
     temporal_class,
     tgsis_table,
 )
-from tgsis.db._transfer import Storage, class_property_arrays, concat, insert_feature_row, local_positions
+from tgsis.db._transfer import (
+    Storage,
+    class_property_arrays,
+    concat,
+    insert_feature_row,
+    local_positions,
+    read_only_snapshot,
+)
 from tgsis.db.classes import FeatureClass
 from tgsis.db.copy import SQL_TYPES
 from tgsis.drawing import Drawable
@@ -409,7 +416,7 @@ def fetch_evolving(conn: Conn, feature_class: str | FeatureClass, feature_id: in
     """
     fc = temporal_class(conn, feature_class, "EVOLVING")
     names, types = cell_columns(fc)
-    with reraise(), conn.transaction():
+    with reraise(), read_only_snapshot(conn):  # every table's rows of one state
         row = conn.execute(
             "SELECT geoname, alive, colorred, colorgreen, colorblue FROM tgsis.geometry "
             "WHERE geoid = %s AND timemodel = 'EVOLVING'",

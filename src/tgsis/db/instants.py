@@ -41,7 +41,7 @@ from tgsis.db._temporal_common import (
     temporal_class,
     tgsis_table,
 )
-from tgsis.db._transfer import Storage, aligned_properties, concat, insert_feature_row, row_keys
+from tgsis.db._transfer import Storage, aligned_properties, concat, insert_feature_row, read_only_snapshot, row_keys
 from tgsis.db.classes import FeatureClass
 from tgsis.db.copy import SQL_TYPES
 from tgsis.drawing import Drawable
@@ -274,7 +274,7 @@ def fetch_series(conn: Conn, feature_class: str | FeatureClass, feature_id: int)
     """
     fc = temporal_class(conn, feature_class, "INSTANTS")
     names, types = cell_columns(fc)
-    with reraise(), conn.transaction():
+    with reraise(), read_only_snapshot(conn):  # every table's rows of one state
         row = conn.execute(
             "SELECT geoname, alive, colorred, colorgreen, colorblue FROM tgsis.geometry "
             "WHERE geoid = %s AND timemodel = 'INSTANTS'",

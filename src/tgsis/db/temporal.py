@@ -106,7 +106,7 @@ def surfaces_at(
             hint="features_at lists the features of any class that exist at t",
         )
     t_lit, c_lit = time_args(t, convention)
-    with reraise(), conn.transaction():
+    with reraise(), read_only_snapshot(conn):  # the features and their rows of one state
         alive = features_at(conn, fc, t, convention=convention)
         names = dict(
             conn.execute("SELECT geoid, geoname FROM tgsis.geometry WHERE geoid = ANY (%s)", (alive,)).fetchall()
