@@ -11,8 +11,10 @@
 -- versioning off): a versioned class is refused by name (TG300), and so is
 -- tgsis.enable_feature_versioning while a class's properties are in chunks
 -- (tgsis.version_class_tables); add_property, rename_property and
--- drop_property are refused by name (TG100) while they are; drop_feature_class
--- drops the chunk table with the class. tgsis.store_class_in_rows goes back.
+-- drop_property convert the table back to rows and to chunks again around the
+-- change (tgsis.alter_class_table); drop_feature_class drops the chunk table
+-- with the class. The Python upload and download move whole chunks
+-- (tgsis.write_property_chunks, src/tgsis/db/_property_chunks.py). tgsis.store_class_in_rows goes back.
 -- Vector properties have no chunk form yet (TG100, tgsis.chunk_columns).
 -- A table with row-level security, policies, a user's trigger, or a view or
 -- foreign key over it is refused by name (TG202): a view can carry none of
