@@ -5,15 +5,25 @@ case) uploaded with ``insert_feature`` (vertices and triangles in chunks, model 
 rows), measured, then the class switched by ``tgsis.store_class_in_chunks`` (opt-in) and measured again, after
 VACUUM. With ``--versioned``, feature versioning is on before the upload (issue 40 asks the disk figure
 versioned): the property rows are measured in their ``_ver`` storage, the chunks in the chunk table that is then
-the class's versioned storage (``tgsis.storage_table``). Prints ``name: value`` lines.
+the class's versioned storage (``tgsis.storage_table``); the transfer below is then not run (the bulk paths
+serve unversioned classes; a versioned one goes through the face, row by row). Without it, the transfer, in the
+same run: ``insert_feature`` and ``fetch_feature`` of the same surface in three classes side by side, in turn
+(``--repeat`` times, medians): ``bare`` (no property: the mesh alone), ``onrows`` (the property as rows) and
+``inchunks`` (switched while empty: the property's chunks encoded by the client and written by
+``tgsis.write_property_chunks``, read back from the chunks); the property's share is each time less the
+bare mesh's, and the property's part of the fetch's query is timed alone (``property_read``). ``--face`` also
+times the path before the bulk one (the face's rows, its trigger row by row) on a surface of ``--face-side``
+(the face's upload takes milliseconds a row). Prints ``name: value`` lines.
 
-    .venv/bin/python bench/property_chunks.py [--side 1000] [--order spatial|file] [--versioned]
+    .venv/bin/python bench/property_chunks.py [--side 1000] [--order spatial|file] [--versioned] [--repeat 3] [--face]
 """
 
 from __future__ import annotations
 
 import argparse
+import statistics
 import time
+from collections.abc import Callable
 from typing import Any
 
 import psycopg
@@ -21,7 +31,9 @@ from timing import bench_database
 from transfer import grid_surface
 
 import tgsis
+import tgsis.db._static as static
 from tgsis.db import features as F
+from tgsis.db._transfer import Packed, columns_out_all
 from tgsis.db.versions import storage_table
 
 Conn = psycopg.Connection[Any]
@@ -34,11 +46,66 @@ def total(conn: Conn, relation: str) -> int:
     return int(row[0])
 
 
+def seconds(call: Callable[[], Any]) -> float:
+    start = time.perf_counter()
+    call()
+    return time.perf_counter() - start
+
+
+def transfer(
+    conn: Conn, surface: Any, order: str, repeat: int, through_face: bool = False, suffix: str = ""
+) -> dict[str, float]:
+    """Medians of insert_feature + commit and fetch_feature for classes bare, onrows, inchunks, in turn."""
+    props = [("porosity", "double precision")]
+    classes = {f"bare{suffix}": [], f"onrows{suffix}": props, f"inchunks{suffix}": props}
+    bare = tgsis.Surface(surface.vertices, surface.cells)
+    for name, props in classes.items():
+        tgsis.create_feature_class(conn, name, "SURFACE", cell_properties=props)
+    conn.execute("SELECT tgsis.store_class_in_chunks(%s)", (f"inchunks{suffix}",))
+    conn.commit()
+    saved = static.property_chunks, static.property_request
+    if through_face:  # the path before the bulk one: the face's rows, through its trigger
+        static.property_chunks = lambda *a: None  # type: ignore[assignment]
+        static.property_request = lambda *a: None  # type: ignore[assignment]
+    times: dict[str, list[float]] = {}
+    try:
+        for _ in range(repeat):
+            for name in classes:
+                mesh = bare if name.startswith("bare") else surface
+                geoid = 0
+
+                def upload(name: str = name, mesh: Any = mesh) -> None:
+                    nonlocal geoid
+                    geoid = F.insert_feature(conn, name, mesh, order=order)
+                    conn.commit()
+
+                key = name.removesuffix(suffix)
+                times.setdefault(f"{key}_upload", []).append(seconds(upload))
+                times.setdefault(f"{key}_fetch", []).append(seconds(lambda: F.fetch_feature(conn, name, geoid)))
+                if not key.startswith("bare"):  # the property's part of the fetch's one query, alone
+                    fc = tgsis.get_feature_class(conn, name)
+                    part = static.property_request(conn, fc, fc.cellprotable, ["porosity"], [geoid]) or Packed(
+                        fc.qualified(fc.cellprotable), "_geoid", [("_idx", "int8"), ("porosity", "float8")], [geoid]
+                    )
+                    times.setdefault(f"{key}_read", []).append(seconds(lambda: columns_out_all(conn, [part])))
+                conn.rollback()
+    finally:
+        static.property_chunks, static.property_request = saved
+    if not through_face:  # (a session that wrote through the face holds tables of its row type until it ends)
+        for name in classes:
+            tgsis.drop_feature_class(conn, name, force=True)
+        conn.commit()
+    return {k: statistics.median(v) for k, v in times.items()}
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--side", type=int, default=1000)
     parser.add_argument("--order", choices=("spatial", "file"), default="spatial")
     parser.add_argument("--versioned", action="store_true", help="feature versioning on before the upload")
+    parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--face", action="store_true", help="also the face's row-by-row path, on --face-side")
+    parser.add_argument("--face-side", type=int, default=100)
     args = parser.parse_args()
     surface = grid_surface(args.side)
     n = surface.n_vertices
@@ -81,6 +148,31 @@ def main() -> None:
         fetched = F.fetch_feature(conn, "horizon", geoid).mesh
         print(f"fetch_feature_through_the_face_s: {time.perf_counter() - start:.2f}")
         assert isinstance(fetched, tgsis.Surface) and fetched.n_vertices == n
+        conn.autocommit = False
+        tgsis.drop_feature_class(conn, "horizon", force=True)
+        conn.commit()
+        if args.versioned:
+            return
+        runs = [("", surface, False)]
+        if args.face:
+            small = grid_surface(args.face_side)
+            runs += [(f"side{args.face_side}_bulk_", small, False), (f"side{args.face_side}_face_", small, True)]
+        for prefix, mesh, face in runs:
+            t = transfer(conn, mesh, args.order, args.repeat, face, "_face" if face else "")
+            for name in ("bare", "onrows", "inchunks"):
+                print(f"{prefix}{name}_upload_s: {t[f'{name}_upload']:.3f}")
+                print(f"{prefix}{name}_fetch_s: {t[f'{name}_fetch']:.3f}")
+            print(f"{prefix}property_read_rows_s: {t['onrows_read']:.3f}")
+            print(f"{prefix}property_read_chunks_s: {t['inchunks_read']:.3f}")
+            print(f"{prefix}property_read_chunks_to_rows: {t['inchunks_read'] / t['onrows_read']:.2f}")
+            for way in ("upload", "fetch"):
+                on_rows = t[f"onrows_{way}"] - t[f"bare_{way}"]
+                in_chunks = t[f"inchunks_{way}"] - t[f"bare_{way}"]
+                print(f"{prefix}property_{way}_rows_s: {on_rows:.3f}")
+                print(f"{prefix}property_{way}_chunks_s: {in_chunks:.3f}")
+                if on_rows > 0:
+                    print(f"{prefix}property_{way}_chunks_to_rows: {in_chunks / on_rows:.2f}")
+                print(f"{prefix}{way}_inchunks_to_onrows: {t[f'inchunks_{way}'] / t[f'onrows_{way}']:.2f}")
 
 
 if __name__ == "__main__":

@@ -221,6 +221,76 @@ def test_bad_input_is_refused_by_name() -> None:
         from_copy(b"not a copy stream at all", XYZ)
 
 
+#: a class's property table: one column of each property type (docs/storage.md, "The bulk paths of property chunks")
+PROPS = ChunkColumns(
+    ("a", "b", "c", "d", "e", "f"),
+    properties=(("a", "int2"), ("b", "int4"), ("c", "int8"), ("d", "float4"), ("e", "float8"), ("f", "bool")),
+    key="_geoid",
+)
+
+
+def _property_rows(n: int) -> dict[str, Any]:
+    rng = np.random.default_rng(5)
+    cols: dict[str, Any] = {
+        "a": rng.integers(-32768, 32768, n).astype(np.int16),
+        "b": rng.integers(-(2**31), 2**31, n, dtype=np.int64).astype(np.int32),
+        "c": rng.integers(-(2**63), 2**63 - 1, n, dtype=np.int64),
+        "d": np.array([0x80000000, 0x7FC00ABC, 1] * n, dtype=np.uint32)[:n].view(np.float32),
+        "e": np.array([0x8000000000000000, 0x7FF8000000000ABC, 1] * n, dtype=np.uint64)[:n].view(np.float64),
+        "f": rng.random(n) < 0.5,
+    }
+    return cols
+
+
+def test_property_kinds_and_nulls_round_trip_apart_from_holes() -> None:
+    ids = np.array([i for i in range(2500) if i % 97 != 5] + [2**40 + 3], dtype=np.int64)
+    cols = _property_rows(len(ids))
+    nulls = {"b": np.arange(len(ids)) % 7 == 0, "f": np.zeros(len(ids), dtype=bool)}
+    order = np.random.default_rng(2).permutation(len(ids))  # ids in any order
+    chunks = encode(ids[order], {k: v[order] for k, v in cols.items()}, PROPS, {k: v[order] for k, v in nulls.items()})
+    assert set(chunks.nulls) == {"b"}  # (no NULL in f: no mask)
+    back = via_copy(chunks)
+    got_ids, got = back.rows()
+    assert np.array_equal(got_ids, ids)
+    for name, expected in cols.items():
+        assert got[name].dtype == expected.dtype, name
+        keep = ~nulls.get(name, np.zeros(len(ids), dtype=bool))
+        if expected.dtype.kind == "f":
+            width = np.int32 if expected.dtype == np.float32 else np.int64
+            assert np.array_equal(got[name][keep].view(width), expected[keep].view(width)), name
+        else:
+            assert np.array_equal(got[name][keep], expected[keep]), name
+    assert set(back.null_rows()) == {"b"} and np.array_equal(back.null_rows()["b"], nulls["b"])
+    # holes stay holes, not NULL values
+    assert np.array_equal(back.present, chunks.present) and not back.present.all()
+
+
+def test_property_values_of_another_type_are_refused_by_name() -> None:
+    ids = np.arange(3)
+    cols = _property_rows(3)
+    for name, wrong in (("d", cols["d"].astype(np.float64)), ("e", cols["e"].astype(np.float32)), ("f", np.ones(3))):
+        with pytest.raises(InvalidInputError, match=repr(name)):
+            encode(ids, {**cols, name: wrong}, PROPS)
+    with pytest.raises(InvalidInputError, match="range"):
+        encode(ids, {**cols, "a": np.array([0, 1, 40000])}, PROPS)
+    with pytest.raises(InvalidInputError, match="only property columns"):
+        encode(np.arange(2), {"x": np.zeros(2), "y": np.zeros(2), "z": np.zeros(2)}, XYZ, {"x": np.ones(2, bool)})
+    # a value where the chunk has a hole: refused when parsed
+    chunks = encode(np.array([0, 2]), {k: v[:2] for k, v in cols.items()}, PROPS)
+    stream = _select_stream(to_copy(chunks, 1), PROPS)
+    null_element = b"\xff\xff\xff\xff"
+    one_b = (4).to_bytes(4, "big") + int(cols["b"][0]).to_bytes(4, "big", signed=True)
+    hole_b = stream.index(one_b) + 8  # b's second element: the hole (NULL), then its third
+    assert stream[hole_b : hole_b + 4] == null_element
+    field = stream.index(one_b) - 24  # b's field length word (then the array's 20-byte header)
+    length = int.from_bytes(stream[field : field + 4], "big") + 4
+    forged = (
+        stream[:field] + length.to_bytes(4, "big") + stream[field + 4 : hole_b] + (4).to_bytes(4, "big") + bytes(4)
+    ) + stream[hole_b + 4 :]
+    with pytest.raises(InvalidInputError, match="a value at a hole"):
+        from_copy(forged, PROPS)
+
+
 def test_chunk_of_every_id_is_id_shifted() -> None:
     rng = np.random.default_rng(3)
     ids = rng.choice(2**20, size=50_000, replace=False).astype(np.int64)

@@ -15,7 +15,13 @@
 -- they are refused (TG202), nothing changed. Runs as the owner of the
 -- class's tables (tgsis's): called by add_property, rename_property and
 -- drop_property. A property table stored in chunks (tgsis.store_class_in_chunks)
--- is refused by name (TG100): altering its chunk table is not built.
+-- is stored as rows first (tgsis.store_class_in_rows, verified value for
+-- value), altered as rows, and stored in chunks again (verified too): the
+-- chunk table, its views and the face are made anew over the new columns,
+-- the face with the table's grants and comments. Correct, but it converts the
+-- whole table twice (its cost is the table's size, not the change's); what the
+-- new columns cannot be in chunks (a vector property, a reserved name) is
+-- refused by store_class_in_chunks by name (TG100), nothing changed.
 CREATE FUNCTION tgsis.alter_class_table(p_class tgsis.catalog, p_table text, p_alters text[],
                                         p_properties jsonb DEFAULT '[]', p_what text DEFAULT NULL)
 RETURNS void
@@ -33,17 +39,15 @@ DECLARE
     v_alter   text;
     v_class_grants aclitem[];
     v_acl     record;
+    v_chunked boolean;
 BEGIN
     -- a property table stored in chunks (tgsis.store_class_in_chunks): its columns are the chunk table's arrays and
-    -- the face's; altering them is not built, refused by name rather than half done
-    IF to_regclass(format('%I.%I', v_schema, p_table || '_shape')) IS NOT NULL
-       AND to_regclass(format('%I.%I', v_schema, p_table || '_chunk')) IS NOT NULL
-           AND (SELECT c.relkind FROM pg_class c WHERE c.oid = to_regclass(format('%I.%I', v_schema, p_table))) = 'v' THEN
-        RAISE EXCEPTION 'the properties of feature class % are stored in chunks: their columns cannot change yet', p_class.classname
-            USING ERRCODE = 'TG100',
-                  DETAIL = format('%I.%I is a face over %I.%I; adding, renaming or dropping a property there is not built. '
-                                  'SELECT tgsis.store_class_in_rows(%L) stores them as rows again. Nothing was changed.',
-                                  v_schema, p_table, v_schema, p_table || '_chunk', p_class.classname);
+    -- the face's; it is altered as rows, between a switch back to rows and one to chunks again (both verified)
+    v_chunked := to_regclass(format('%I.%I', v_schema, p_table || '_shape')) IS NOT NULL
+                 AND to_regclass(format('%I.%I', v_schema, p_table || '_chunk')) IS NOT NULL
+                 AND (SELECT c.relkind FROM pg_class c WHERE c.oid = to_regclass(format('%I.%I', v_schema, p_table))) = 'v';
+    IF v_chunked THEN
+        PERFORM tgsis.store_class_in_rows(p_class.classname);
     END IF;
     -- the class view is made again by tgsis.create_class_view; the rights granted on it since are kept
     SELECT c.relacl INTO v_class_grants FROM pg_class c
@@ -75,6 +79,9 @@ BEGIN
             USING ERRCODE = 'TG202', DETAIL = v_detail,
                   HINT = 'drop the views that read the class''s tables, change the class, then create them again';
     END;
+    IF v_chunked THEN
+        PERFORM tgsis.store_class_in_chunks(p_class.classname);
+    END IF;
     PERFORM tgsis.create_class_view(p_class.classname);
     FOR v_acl IN
         SELECT a.privilege_type, a.grantee FROM aclexplode(v_class_grants) AS a
@@ -93,4 +100,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.alter_class_table(tgsis.catalog, text, text[], jsonb, text) IS
-    'run ALTER TABLE <each of p_alters> on a feature-class table (in place when plain, on <table>_ver when versioned: every version''s rows), re-create its versioned view and generated trigger function over the new columns, and the class view (and PostGIS view); TG202 when views of others depend on it';
+    'run ALTER TABLE <each of p_alters> on a feature-class table (in place when plain, on <table>_ver when versioned: every version''s rows; stored as rows first and in chunks again when its properties are in chunks), re-create its versioned view and generated trigger function over the new columns, and the class view (and PostGIS view); TG202 when views of others depend on it';

@@ -16,8 +16,12 @@
 -- marks renewed (solved conflicts stay solved), as tgsis.store_in_chunks does
 -- for a model table. tgsis.enable_feature_versioning versions a class whose
 -- properties are in chunks (tgsis.version_class_tables). add_property,
--- rename_property and drop_property are refused by name (TG100) while they
--- are; drop_feature_class drops the chunk table with the class.
+-- rename_property and drop_property convert the table back to rows and to
+-- chunks again around the change (tgsis.alter_class_table; a versioned class
+-- cannot go back to rows yet, so they are refused for it, TG300);
+-- drop_feature_class drops the chunk table with the class. The Python upload
+-- and download of an unversioned class move whole chunks
+-- (tgsis.write_property_chunks, src/tgsis/db/_property_chunks.py).
 -- tgsis.store_class_in_rows goes back (not for a versioned class: TG300).
 -- Vector properties have no chunk form yet (TG100, tgsis.chunk_columns).
 -- A table with row-level security, policies, a user's trigger, or a view or

@@ -57,8 +57,17 @@ CHUNK_SIZE = 1 << CHUNK_BITS
 COPY_SIGNATURE = b"PGCOPY\n\xff\r\n\x00"
 
 #: element type OIDs of array_recv/array_send
-_OID = {"float8": 701, "int8": 20, "int4": 23, "int2": 21}
-_BIG_ENDIAN = {"float8": ">f8", "int8": ">i8", "int4": ">i4", "int2": ">i2"}
+_OID = {"float8": 701, "int8": 20, "int4": 23, "int2": 21, "float4": 700, "bool": 16}
+_BIG_ENDIAN = {"float8": ">f8", "int8": ">i8", "int4": ">i4", "int2": ">i2", "float4": ">f4", "bool": "u1"}
+#: the element kinds a property column may have (docs/storage.md, "Property chunks: the contract"), and their values
+PROPERTY_KINDS: dict[str, Any] = {
+    "int2": np.int16,
+    "int4": np.int32,
+    "int8": np.int64,
+    "float4": np.float32,
+    "float8": np.float64,
+    "bool": np.bool_,
+}
 _INT4_MIN, _INT4_MAX = -(2**31), 2**31 - 1
 
 IntArray = npt.NDArray[np.int64]
@@ -79,19 +88,46 @@ class ChunkColumns:
         and ``<name>_wide``); the first of them is the base of the others.
     integers : tuple of str
         Those of ``names`` that are other bigint columns (``bigint[]``); the rest are float8.
+    properties : tuple of (str, str)
+        Those of ``names`` that are a feature class's properties (docs/storage.md, "Property chunks: the
+        contract"), with their element kind (a key of :data:`PROPERTY_KINDS`: ``int2``, ``int4``, ``int8``,
+        ``float4``, ``float8``, ``bool``): arrays of that type whose elements may be NULL at present slots
+        too (a value missing, not a hole: :attr:`ChunkSet.nulls`).
+    key : str
+        The chunk table's object key column (``geoid``; ``_geoid`` for a class's property table).
     """
 
     names: tuple[str, ...]
     refs: tuple[str, ...] = ()
     integers: tuple[str, ...] = ()
+    properties: tuple[tuple[str, str], ...] = ()
+    key: str = "geoid"
 
     def __post_init__(self) -> None:
-        unknown = [c for c in (*self.refs, *self.integers) if c not in self.names]
-        if unknown or len(set(self.names)) != len(self.names) or set(self.refs) & set(self.integers):
+        kinds = dict(self.properties)
+        unknown = [c for c in (*self.refs, *self.integers, *kinds) if c not in self.names]
+        if (
+            unknown
+            or len(set(self.names)) != len(self.names)
+            or set(self.refs) & set(self.integers)
+            or set(kinds) & (set(self.refs) | set(self.integers))
+            or len(kinds) != len(self.properties)
+            or any(k not in PROPERTY_KINDS for k in kinds.values())
+        ):
             raise InvalidInputError(
-                f"chunk columns {list(self.names)}: refs {list(self.refs)} and integers {list(self.integers)} "
-                "must be distinct columns among them"
+                f"chunk columns {list(self.names)}: refs {list(self.refs)}, integers {list(self.integers)} and "
+                f"properties {list(self.properties)} must be distinct columns among them, properties of the kinds "
+                f"{list(PROPERTY_KINDS)}"
             )
+
+    def nullable(self, name: str) -> bool:
+        """Whether column ``name`` is a property, whose elements may be NULL at present slots."""
+        return any(name == n for n, _ in self.properties)
+
+    def dtype(self, name: str) -> Any:
+        """The numpy type of column ``name``'s decoded values (int64 ids for a ref column)."""
+        kind = self.kind(name)
+        return np.int64 if name in self.refs else PROPERTY_KINDS[kind]
 
     @property
     def ref_order(self) -> tuple[str, ...]:
@@ -99,13 +135,17 @@ class ChunkColumns:
         return tuple(c for c in self.names if c in self.refs)
 
     def kind(self, name: str) -> str:
-        """The element type of column ``name``'s array: ``float8``, ``int8`` or (a ref column) ``int4``."""
-        return "int4" if name in self.refs else "int8" if name in self.integers else "float8"
+        """The element type of column ``name``'s array: ``float8``, ``int8``, (a ref column) ``int4``, or a property's."""
+        if name in self.refs:
+            return "int4"
+        if name in self.integers:
+            return "int8"
+        return dict(self.properties).get(name, "float8")
 
     def copy_columns(self) -> list[str]:
         """The columns a binary COPY of :func:`to_copy` fills, in its order (``lastrevs``, ``revclosed`` left out)."""
         wide = [f"{c}_wide" for c in self.ref_order]
-        return ["geoid", "chunk", "revision", "holes", *(["vbase", "vtop"] if self.refs else []), *self.names, *wide]
+        return [self.key, "chunk", "revision", "holes", *(["vbase", "vtop"] if self.refs else []), *self.names, *wide]
 
     def select_columns(self) -> list[str]:
         """The columns :func:`from_copy` parses, in its order: ``chunk, holes, [vbase,] arrays..., [wide...]``.
@@ -144,6 +184,9 @@ class ChunkSet:
     vtop : (c,) int64
         A bound of each chunk's ref values, as the column ``vtop`` stores it (:func:`ref_bound`; -1 without ref
         columns; empty when decoded, :func:`from_copy` does not read it).
+    nulls : dict of str to (s,) bool
+        Per property column (:attr:`ChunkColumns.properties`) that has any: True at a present slot whose value
+        is NULL (its value in ``values`` is 0); a column not in it has none.
     """
 
     columns: ChunkColumns
@@ -156,6 +199,7 @@ class ChunkSet:
     relative: dict[str, npt.NDArray[np.int32]] = field(default_factory=dict)
     absolute: dict[str, IntArray] = field(default_factory=dict)
     vtop: IntArray = field(default_factory=lambda: np.empty(0, dtype=np.int64))
+    nulls: dict[str, BoolArray] = field(default_factory=dict)
 
     @property
     def offsets(self) -> IntArray:
@@ -187,6 +231,11 @@ class ChunkSet:
             out[name] = column.copy() if dense and name not in self.columns.refs else column[self.present]
         return ids, out
 
+    def null_rows(self) -> dict[str, BoolArray]:
+        """Per property column with NULL values: (n,) bool, True where the row's value is NULL (rows as :meth:`rows`)."""
+        dense = bool(self.present.all())
+        return {name: mask.copy() if dense else mask[self.present] for name, mask in self.nulls.items()}
+
     def _ref_values(self, name: str) -> IntArray:
         refs = self.columns.ref_order
         if not self.wide.any():
@@ -213,7 +262,12 @@ def _int_ids(values: npt.ArrayLike, what: str) -> IntArray:
     return result
 
 
-def encode(ids: npt.ArrayLike, columns: Mapping[str, npt.ArrayLike], spec: ChunkColumns) -> ChunkSet:
+def encode(
+    ids: npt.ArrayLike,
+    columns: Mapping[str, npt.ArrayLike],
+    spec: ChunkColumns,
+    nulls: Mapping[str, npt.ArrayLike] | None = None,
+) -> ChunkSet:
     """Rows (ids in any order) as chunks.
 
     Parameters
@@ -223,8 +277,13 @@ def encode(ids: npt.ArrayLike, columns: Mapping[str, npt.ArrayLike], spec: Chunk
     columns : mapping of str to (n,) array_like
         One value per row for every column of ``spec.names``: float64 for
         float8 columns (kept bit for bit), integers for ref and bigint columns
-        (ref values >= 0: vertex ids).
+        (ref values >= 0: vertex ids); a property column (``spec.properties``)
+        of its kind's numpy type (float32 and float64 kept bit for bit, bool
+        for ``bool``; integers that fit the kind).
     spec : ChunkColumns
+    nulls : mapping of str to (n,) array_like of bool, optional
+        Property columns whose rows' values are NULL where True (the value
+        given there is ignored).
 
     Returns
     -------
@@ -234,12 +293,19 @@ def encode(ids: npt.ArrayLike, columns: Mapping[str, npt.ArrayLike], spec: Chunk
     ------
     InvalidInputError
         Negative or repeated ids, negative ref values, missing or extra
-        columns, columns of the wrong length or type.
+        columns, columns of the wrong length or type, NULLs given for a
+        column that is no property.
     """
     id_array = _int_ids(ids, "ids")
     n = len(id_array)
     if set(columns) != set(spec.names):
         raise InvalidInputError(f"columns {sorted(columns)} are not the chunk columns {list(spec.names)}")
+    null_given = dict(nulls or {})
+    if any(not spec.nullable(name) for name in null_given):
+        raise InvalidInputError(
+            f"NULL values given for {sorted(n for n in null_given if not spec.nullable(n))}: only property columns "
+            f"({[name for name, _ in spec.properties]}) hold NULLs"
+        )
     ascending = n < 2 or bool((id_array[1:] > id_array[:-1]).all())  # the usual case: ids 0..n-1 in order
     order = None if ascending else np.argsort(id_array, kind="stable")
     sorted_ids = id_array if order is None else id_array[order]
@@ -274,6 +340,7 @@ def encode(ids: npt.ArrayLike, columns: Mapping[str, npt.ArrayLike], spec: Chunk
         return values if order is None else values[order]
 
     values: dict[str, npt.NDArray[Any]] = {}
+    null_slots: dict[str, BoolArray] = {}
     refs: dict[str, IntArray] = {}
     for name in spec.names:
         raw = np.asarray(columns[name])
@@ -283,6 +350,17 @@ def encode(ids: npt.ArrayLike, columns: Mapping[str, npt.ArrayLike], spec: Chunk
             refs[name] = in_id_order(_int_ids(raw, f"column {name!r}"))
             continue
         kind = spec.kind(name)
+        if spec.nullable(name):
+            values[name] = slotted(in_id_order(_property_values(name, raw, kind)), PROPERTY_KINDS[kind])
+            if name in null_given:
+                mask = np.asarray(null_given[name])
+                if mask.shape != (n,) or mask.dtype != np.bool_:
+                    raise InvalidInputError(
+                        f"NULLs of column {name!r}: (n,) bool expected, got {mask.dtype} {mask.shape}"
+                    )
+                if mask.any():
+                    null_slots[name] = slotted(in_id_order(mask), np.bool_)
+            continue
         if kind == "float8" and raw.size and raw.dtype.newbyteorder("=") != np.float64:  # either byte order
             raise InvalidInputError(f"column {name!r} must be float64, got {raw.dtype}")
         if kind == "int8" and raw.size and raw.dtype.kind not in "iu":
@@ -325,7 +403,24 @@ def encode(ids: npt.ArrayLike, columns: Mapping[str, npt.ArrayLike], spec: Chunk
             relative[r] = np.zeros(total, dtype=np.int32)
             absolute[r] = np.zeros(total, dtype=np.int64)
         vtop = np.full(c, -1, dtype=np.int64)
-    return ChunkSet(spec, chunk, lengths, present, values, vbase, wide, relative, absolute, vtop)
+    return ChunkSet(spec, chunk, lengths, present, values, vbase, wide, relative, absolute, vtop, null_slots)
+
+
+def _property_values(name: str, raw: npt.NDArray[Any], kind: str) -> npt.NDArray[Any]:
+    """A property column's values as its kind's numpy type: floats of that very type (bits kept), integers that fit."""
+    target = np.dtype(PROPERTY_KINDS[kind])
+    if not raw.size:
+        return raw.astype(target)
+    if kind in ("float4", "float8") or kind == "bool":
+        if raw.dtype.newbyteorder("=") != target:  # either byte order; no rounding, no truthiness
+            raise InvalidInputError(f"column {name!r} must be {target}, got {raw.dtype}")
+        return raw
+    if raw.dtype.kind not in "iu" and raw.dtype != np.bool_:
+        raise InvalidInputError(f"column {name!r} must be integers, got {raw.dtype}")
+    info = np.iinfo(target)
+    if raw.dtype.itemsize >= target.itemsize and (int(raw.min()) < info.min or int(raw.max()) > info.max):
+        raise InvalidInputError(f"column {name!r} holds values outside {kind}'s range {info.min}..{info.max}")
+    return raw.astype(target)
 
 
 def ref_bound(vbase: IntArray, reach: IntArray, largest: IntArray, wide: BoolArray) -> IntArray:
@@ -433,18 +528,25 @@ def to_copy(chunks: ChunkSet, geoid: int, revision: int = 0) -> bytes:
     null = np.array([-1], dtype=">i4").tobytes()
 
     # every array column's elements, flat over all slots, with the byte end of each slot
-    encoded: list[tuple[str, npt.NDArray[np.uint8], IntArray, BoolArray | None]] = []
+    # (kind, element bytes, slot byte ends, chunks where the column is NULL, chunks whose array has NULL elements)
+    encoded: list[tuple[str, npt.NDArray[np.uint8], IntArray, BoolArray | None, BoolArray]] = []
     empty = (np.empty(0, dtype=np.uint8), np.empty(0, dtype=np.int64))
     for name in spec.names:
         if name in spec.refs:
             relative = empty if chunks.wide.all() else _element_bytes(chunks.relative[name], "int4", chunks.present)
-            encoded.append(("int4", *relative, chunks.wide))
+            encoded.append(("int4", *relative, chunks.wide, has_holes))
         else:
             kind = spec.kind(name)
-            encoded.append((kind, *_element_bytes(chunks.values[name], kind, chunks.present), None))
+            missing = chunks.nulls.get(name)
+            if missing is not None and missing.any():  # a property's NULL values: NULL elements at present slots too
+                elements = chunks.present & ~missing
+                hasnull = np.logical_not(np.logical_and.reduceat(elements, offsets[:-1])) if c else has_holes
+                encoded.append((kind, *_element_bytes(chunks.values[name], kind, elements), None, hasnull))
+            else:
+                encoded.append((kind, *_element_bytes(chunks.values[name], kind, chunks.present), None, has_holes))
     for name in spec.ref_order:
         wide = _element_bytes(chunks.absolute[name], "int8", chunks.present) if chunks.wide.any() else empty
-        encoded.append(("int8", *wide, ~chunks.wide))
+        encoded.append(("int8", *wide, ~chunks.wide, has_holes))
 
     pieces: list[bytes] = [COPY_SIGNATURE, np.array([0, 0], dtype=">i4").tobytes()]
     for k in range(c):
@@ -464,12 +566,12 @@ def to_copy(chunks: ChunkSet, geoid: int, revision: int = 0) -> bytes:
             else:
                 pieces.append(np.array([(8, chunks.vbase[k])], dtype=[("l", ">i4"), ("v", ">i8")]).tobytes())
             pieces.append(np.array([(8, vtop[k])], dtype=[("l", ">i4"), ("v", ">i8")]).tobytes())
-        for kind, flat, ends, nulled in encoded:
+        for kind, flat, ends, nulled, hasnull in encoded:
             if nulled is not None and nulled[k]:
                 pieces.append(null)
                 continue
             first = int(ends[start - 1]) if start else 0
-            pieces.append(_array_field(flat[first : int(ends[stop - 1])].tobytes(), kind, count, bool(has_holes[k])))
+            pieces.append(_array_field(flat[first : int(ends[stop - 1])].tobytes(), kind, count, bool(hasnull[k])))
     pieces.append(np.array([-1], dtype=">i2").tobytes())
     return b"".join(pieces)
 
@@ -537,6 +639,48 @@ def _parse_array(
     return values, present
 
 
+def _parse_nullable(reader: _Reader, length: int, kind: str, present: BoolArray) -> tuple[npt.NDArray[Any], BoolArray]:
+    """A property's array value (array_send form) with NULL elements anywhere: (values, which elements are not NULL).
+
+    Its length is the chunk's and it is NULL at every hole (a present slot may be NULL too: a value missing).
+    """
+    end = reader.pos + length
+    if length < 20 or end > len(reader.buf):
+        raise InvalidInputError(f"binary COPY data ends inside an array (byte {reader.pos} of {len(reader.buf)})")
+    ndim, _, oid, count, lbound = (reader.int(4) for _ in range(5))
+    if oid != _OID[kind]:
+        raise InvalidInputError(f"a chunk array has element type {oid}, expected {_OID[kind]} ({kind})")
+    if ndim != 1 or lbound != 1 or count != len(present):
+        raise InvalidInputError(f"a chunk's property array is not one-dimensional from 1 of its {len(present)} slots")
+    width = np.dtype(_BIG_ENDIAN[kind]).itemsize
+    elements = np.zeros(count, dtype=bool)
+    starts = np.zeros(count, dtype=np.int64)
+    pos = reader.pos
+    for i in range(count):  # (only chunks whose property has NULL values come here)
+        size = int.from_bytes(reader.buf[pos : pos + 4], "big", signed=True)
+        if size == width:
+            elements[i] = True
+            starts[i] = pos + 4
+            pos += 4 + width
+        elif size == -1:
+            pos += 4
+        else:
+            raise InvalidInputError("a chunk array element has an unexpected length")
+        if pos > end:
+            raise InvalidInputError("binary COPY data ends inside an array")
+    if pos != end:
+        raise InvalidInputError("a chunk array is longer than its elements")
+    if bool((elements & ~present).any()):
+        raise InvalidInputError("a chunk's property array has a value at a hole")
+    values = np.zeros(count, dtype=_BIG_ENDIAN[kind])
+    if elements.any():
+        raw = np.frombuffer(reader.buf, dtype=np.uint8)
+        picks = starts[elements][:, None] + np.arange(width)
+        values[elements] = raw[picks].copy().view(_BIG_ENDIAN[kind]).reshape(-1)
+    reader.pos = end
+    return values, elements
+
+
 def from_copy(payload: bytes, spec: ChunkColumns) -> ChunkSet:
     """Parse the binary COPY output of ``COPY (SELECT <spec.select_columns()> ...) TO STDOUT (FORMAT binary)``.
 
@@ -577,6 +721,7 @@ def from_copy(payload: bytes, spec: ChunkColumns) -> ChunkSet:
     batched: dict[tuple[str, bool], list[memoryview]] = {(key, w): [] for _, key, w in columns}
     in_batch: dict[tuple[str, bool], list[bool]] = {(key, w): [] for _, key, w in columns}
     with_holes: dict[tuple[str, bool], dict[int, npt.NDArray[Any]]] = {(key, w): {} for _, key, w in columns}
+    null_parts: dict[str, dict[int, BoolArray]] = {}  # a property's NULL values at present slots, per chunk index
     while True:
         count = reader.int(2)
         if count == -1:
@@ -645,7 +790,13 @@ def from_copy(payload: bytes, spec: ChunkColumns) -> ChunkSet:
                 in_batch[slot].append(True)
                 reader.pos += length
                 continue
-            parsed, _ = _parse_array(reader, length, kind, present)
+            if spec.nullable(key):
+                parsed, elements = _parse_nullable(reader, length, kind, present)
+                missing = present & ~elements
+                if missing.any():
+                    null_parts.setdefault(key, {})[k] = missing
+            else:
+                parsed, _ = _parse_array(reader, length, kind, present)
             if len(parsed) != len(present):
                 raise InvalidInputError(f"chunk {number}: arrays of different lengths")
             with_holes[slot][k] = parsed
@@ -690,10 +841,14 @@ def from_copy(payload: bytes, spec: ChunkColumns) -> ChunkSet:
 
     present_all = np.concatenate(presents) if presents else np.empty(0, dtype=bool)
     values = {
-        n: sorted_slots(column((n, False), spec.kind(n), np.float64 if spec.kind(n) == "float8" else np.int64))
-        for n in spec.names
-        if n not in spec.refs
+        n: sorted_slots(column((n, False), spec.kind(n), spec.dtype(n))) for n in spec.names if n not in spec.refs
     }
+    nulls: dict[str, BoolArray] = {}
+    for name, parts in null_parts.items():
+        mask = np.zeros(int(offsets[-1]), dtype=bool)
+        for k, part in parts.items():
+            mask[offsets[k] : offsets[k + 1]] = part
+        nulls[name] = sorted_slots(mask)
     relative = {r: sorted_slots(column((r, False), "int4", np.int32)) for r in refs}
     absolute = {r: sorted_slots(column((r, True), "int8", np.int64)) for r in refs}
     wide = np.array(wides, dtype=bool)
@@ -707,6 +862,7 @@ def from_copy(payload: bytes, spec: ChunkColumns) -> ChunkSet:
         wide[order],
         relative,
         absolute,
+        nulls=nulls,
     )
     for r in refs:  # vertex ids are 0 or more: a negative one decoded is a chunk that breaks the contract
         decoded = result._ref_values(r)

@@ -41,7 +41,7 @@ from psycopg import sql
 
 from tgsis._chunks import CHUNK_SIZE, COPY_SIGNATURE, ChunkColumns, ChunkSet, encode, from_copy, to_copy
 from tgsis.db._transfer import Packed, PartRequest, Storage, one_snapshot, read_only_snapshot, staged
-from tgsis.errors import AlreadyExistsError, InvalidInputError, NotFoundError
+from tgsis.errors import AlreadyExistsError, DatabaseError, InvalidInputError, NotFoundError
 
 __all__ = [
     "ChunkTable",
@@ -79,17 +79,20 @@ class ChunkTable:
         The row table is versioned (``tgsis.versioned_tables``): chunk versions are filtered by the session's set.
     readable : bool
         The role may SELECT from the chunk table (a role granted only the face ``tgsis.<table>`` reads through it).
+    schema : str
+        The chunk table's schema: ``tgsis`` for a model table, the class's for a class's property table.
     """
 
     table: str
     columns: ChunkColumns
     versioned: bool
     readable: bool = True
+    schema: str = "tgsis"
 
     @property
     def relation(self) -> sql.Composed:
-        """``tgsis.<table>_chunk``, quoted."""
-        return sql.SQL("tgsis.{}").format(sql.Identifier(f"{self.table}_chunk"))
+        """``<schema>.<table>_chunk``, quoted."""
+        return sql.SQL("{}.{}").format(sql.Identifier(self.schema), sql.Identifier(f"{self.table}_chunk"))
 
 
 @dataclass(frozen=True)
@@ -105,12 +108,16 @@ class ObjectRows:
         Every non-key column of the row table: float64 for float8 columns, int64 vertex ids for ref columns.
     holes : (h,) int64
         Download only: the ids absent inside the stored chunks (below each chunk's last present id), ascending.
+    nulls : dict of str to (n,) bool
+        A class's property columns whose value is NULL in some rows (True there; the value in ``columns`` is
+        then 0): written as NULL by an upload, read back so by a download; a column not in it has none.
     """
 
     geoid: int
     ids: npt.NDArray[np.int64]
     columns: dict[str, npt.NDArray[Any]]
     holes: npt.NDArray[np.int64] = field(default_factory=lambda: np.empty(0, dtype=np.int64))
+    nulls: dict[str, npt.NDArray[np.bool_]] = field(default_factory=dict)
 
     def array(self) -> npt.NDArray[Any]:
         """(n, k) the columns side by side in column order: vertices (n, 3) float64, cells (n, k) int64."""
@@ -279,13 +286,14 @@ def chunk_copy_query(layout: ChunkTable, geoids: Sequence[int], revisions: Seque
     :func:`_visible` (default: the session's).
     """
     columns = sql.SQL(", ").join(sql.SQL("c.{}").format(sql.Identifier(c)) for c in layout.columns.select_columns())
+    key = sql.Identifier(layout.columns.key)
     if len(geoids) == 1:
-        select = sql.SQL("SELECT {} FROM {} c WHERE c.geoid = {} AND {}").format(
-            columns, layout.relation, sql.Literal(int(geoids[0])), _visible(layout, revisions)
+        select = sql.SQL("SELECT {} FROM {} c WHERE c.{} = {} AND {}").format(
+            columns, layout.relation, key, sql.Literal(int(geoids[0])), _visible(layout, revisions)
         )
     else:
-        select = sql.SQL("SELECT c.geoid, {} FROM {} c WHERE c.geoid = ANY ({}::bigint[]) AND {}").format(
-            columns, layout.relation, sql.Literal([int(g) for g in geoids]), _visible(layout, revisions)
+        select = sql.SQL("SELECT c.{}, {} FROM {} c WHERE c.{} = ANY ({}::bigint[]) AND {}").format(
+            key, columns, layout.relation, key, sql.Literal([int(g) for g in geoids]), _visible(layout, revisions)
         )
     return sql.SQL("COPY ({}) TO STDOUT (FORMAT binary)").format(select)
 
@@ -389,11 +397,11 @@ def _objects(layout: ChunkTable, geoids: Sequence[int], payload: bytes) -> dict[
 
 def _rows(geoid: int, chunks: ChunkSet | None, spec: ChunkColumns) -> ObjectRows:
     if chunks is None or not len(chunks.chunk):
-        empty = {n: np.empty(0, dtype=np.int64 if n in spec.refs else np.float64) for n in spec.names}
+        empty = {n: np.empty(0, dtype=spec.dtype(n)) for n in spec.names}
         return ObjectRows(geoid, np.empty(0, dtype=np.int64), empty)
     ids, columns = chunks.rows()
     holes = np.empty(0, dtype=np.int64) if chunks.present.all() else chunks.ids()[~chunks.present]
-    return ObjectRows(geoid, ids, columns, holes)
+    return ObjectRows(geoid, ids, columns, holes, chunks.null_rows())
 
 
 def download_chunks(conn: Conn, table: str, geoids: Sequence[int]) -> dict[int, ObjectRows]:
@@ -538,8 +546,9 @@ class PackedChunks:
         if len(self.geoids) == 1:
             return sql.SQL(
                 "SELECT {part}::int4, {geoid}::int8, count(*), string_agg({record}, ''::bytea) FROM {source} c "
-                "WHERE c.geoid = {geoid} AND {visible}"
+                "WHERE c.{key} = {geoid} AND {visible}"
             ).format(
+                key=sql.Identifier(self.layout.columns.key),
                 part=sql.Literal(part),
                 geoid=sql.Literal(int(self.geoids[0])),
                 record=record,
@@ -549,8 +558,9 @@ class PackedChunks:
         return sql.SQL(
             "SELECT {part}::int4, g.k, a.n, a.v FROM (SELECT DISTINCT unnest({geoids}::int8[]) AS k) g "
             "CROSS JOIN LATERAL (SELECT count(*) AS n, string_agg({record}, ''::bytea) AS v FROM {source} c "
-            "WHERE c.geoid = g.k AND {visible}) a"
+            "WHERE c.{key} = g.k AND {visible}) a"
         ).format(
+            key=sql.Identifier(self.layout.columns.key),
             part=sql.Literal(part),
             geoids=sql.Literal([int(g) for g in self.geoids]),
             record=record,
@@ -562,13 +572,19 @@ class PackedChunks:
         """``[geoid, ids, *columns]`` (n,) each from the objects' ``(geoid, chunk rows, record_send values)``."""
         spec = self.layout.columns
         objects = [_rows(geoid, from_copy(records_as_copy(data, count), spec), spec) for geoid, count, data in groups]
+        for o in objects:  # a NULL value where a value is read: as the rows' packed read refuses it
+            missing = [name for name in self.columns[1:] if name in o.nulls and o.nulls[name].any()]
+            if missing:
+                raise DatabaseError(
+                    f"{self.layout.schema}.{self.layout.table}: object {o.geoid} has NULL values of {missing} "
+                    f"({int(o.nulls[missing[0]].sum())} of {missing[0]})",
+                    detail="a mesh property holds a value for every vertex or cell",
+                )
         counts = [len(o.ids) for o in objects]
         geoids = np.repeat(np.asarray([o.geoid for o in objects], dtype=np.int64), counts)
         ids = np.concatenate([np.empty(0, dtype=np.int64), *(o.ids for o in objects)])
         values = [
-            np.concatenate(
-                [np.empty(0, dtype=np.int64 if name in spec.refs else np.float64), *(o.columns[name] for o in objects)]
-            )
+            np.concatenate([np.empty(0, dtype=spec.dtype(name)), *(o.columns[name] for o in objects)])
             for name in self.columns[1:]
         ]
         return [geoids, ids, *values]

@@ -18,6 +18,7 @@ from psycopg import sql
 
 from tgsis.arguments import no_nul
 from tgsis.db._chunk_transfer import ObjectRows, chunked_tables, rows_request, upload_chunks
+from tgsis.db._property_chunks import property_chunks, property_request, upload_properties
 from tgsis.db._transfer import (
     Packed,
     PartRequest,
@@ -224,6 +225,17 @@ def copy_meshes(
         groups: dict[tuple[str, ...], list[int]] = {}
         for i, values in enumerate(cell_values):
             groups.setdefault(tuple(p.name for p in props if p.name in values), []).append(i)
+        layout = property_chunks(conn, fc, protable)
+        if layout is not None and layout.insertable:  # stored in chunks: whole chunks, one COPY for every mesh
+            members = [i for names, group in groups.items() if names for i in group]
+            upload_properties(
+                conn,
+                layout,
+                [geoids[i] for i in members],
+                [meshes[i].n_vertices if alignment == "VERTEX" else meshes[i].n_cells for i in members],
+                [{p.name: cell_values[i][p.name] for p in props if p.name in cell_values[i]} for i in members],
+            )
+            continue
         for names, group in groups.items():
             if not names:
                 continue
@@ -477,8 +489,12 @@ def download(conn: Conn, fc: FeatureClass, parts: Mapping[int, Part]) -> Downloa
         for names, members in property_groups(props, parts).items():
             if names:
                 property_keys.append((alignment, names))
+                # stored in chunks: read from them (the face's rows, decoded here), else the rows
+                chunked_request = property_request(conn, fc, protable, names, members)
                 requests.append(
-                    Packed(
+                    chunked_request
+                    if chunked_request is not None
+                    else Packed(
                         fc.qualified(protable),
                         "_geoid",
                         [("_idx", "int8"), *((p.name, p.wire) for p in props if p.name in names)],

@@ -1,0 +1,219 @@
+"""Bulk upload and download of a class's property chunks (issue 40): the properties of whole features, encoded here.
+
+docs/storage.md, "Property chunks: the contract": once a STATIC class's property
+table ``<schema>.<class>_cellpros`` is stored in chunks
+(``tgsis.store_class_in_chunks``), it is a view (the face) over
+``<class>_cellpros_chunk``, one array per property of the property's own type.
+Writing a feature's properties through the face goes row by row through its
+trigger; these paths move whole chunks instead, as model 1's vertex chunks move
+(:mod:`tgsis.db._chunk_transfer`):
+
+* :func:`upload_properties` encodes the rows with :func:`tgsis._chunks.encode`
+  (NULL values of a collection member's missing properties kept apart from
+  holes), sends them in one binary COPY into a temporary table of the session,
+  and ``tgsis.write_property_chunks`` writes them as the chunk table's owner
+  after the face's checks (the role's INSERT on the face, locks, the
+  encoding, new chunks only);
+* :func:`property_request` reads them in :func:`~tgsis.db._transfer.columns_out_all`'s
+  one query (:class:`~tgsis.db._chunk_transfer.PackedChunks`), decoded here.
+
+Both are taken only where they give what the face gives: a class whose tables
+are not versioned (the versioned face is another engineer's work), and a role
+that may read the chunk table (download) or insert into the face (upload);
+otherwise the callers go through the face as before. Private to ``tgsis.db``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+import psycopg
+from psycopg import sql
+
+from tgsis._chunks import CHUNK_SIZE, ChunkColumns, encode, to_copy
+from tgsis.db._chunk_transfer import ChunkTable, ObjectRows, PackedChunks
+from tgsis.db.classes import FeatureClass
+from tgsis.errors import InvalidInputError
+
+__all__ = ["PropertyChunks", "property_chunks", "property_request", "upload_properties"]
+
+Conn = psycopg.Connection[Any]
+
+#: the array types of a property chunk table, as format_type spells them, and their element kinds
+_KINDS = {
+    "smallint[]": "int2",
+    "integer[]": "int4",
+    "bigint[]": "int8",
+    "real[]": "float4",
+    "double precision[]": "float8",
+    "boolean[]": "bool",
+}
+
+
+@dataclass(frozen=True)
+class PropertyChunks(ChunkTable):
+    """A class's property table stored in chunks, as the session's role may use it in bulk.
+
+    Attributes (besides :class:`~tgsis.db._chunk_transfer.ChunkTable`'s)
+    ------------------------------------------------------------------
+    insertable : bool
+        The role may INSERT into the face (the property table's name) and make temporary tables: the bulk
+        upload is open to it.
+    name : str
+        The table as the chunk layer names it (``format('%I.%I', schema, table)``, ``tgsis.chunk_registry``).
+    oid : int
+        The chunk table's (made anew when a property is added, renamed or dropped).
+    """
+
+    insertable: bool = False
+    name: str = ""
+    oid: int = 0
+
+
+def property_chunks(conn: Conn, fc: FeatureClass, table: str) -> PropertyChunks | None:
+    """The chunk layout of the class's property table ``table`` if its bulk paths are open, else None.
+
+    None: the table is rows (or anything but the face of ``tgsis.store_class_in_chunks``), it is
+    versioned, or its chunk table has a column this client does not encode. Read from the catalog.
+    """
+    row = conn.execute(
+        "SELECT c.oid, f.relkind::text, has_table_privilege(c.oid, 'SELECT'), "
+        "has_table_privilege(f.oid, 'INSERT') AND has_database_privilege(current_database(), 'TEMP'), "
+        "EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = %s AND t.tablename = %s), "
+        "format('%%I.%%I', %s::text, %s::text) "
+        "FROM pg_class c JOIN pg_namespace n ON n.oid = c.relnamespace, pg_class f "
+        "WHERE n.nspname = %s AND c.relname = %s AND f.oid = to_regclass(format('%%I.%%I', %s::text, %s::text))",
+        (fc.schema, table, fc.schema, table, fc.schema, f"{table}_chunk", fc.schema, table),
+    ).fetchone()
+    if row is None or row[1] != "v" or row[4]:
+        return None
+    oid, _, readable, insertable, _, name = row
+    attributes = conn.execute(
+        "SELECT attname::text, format_type(atttypid, atttypmod) FROM pg_catalog.pg_attribute "
+        "WHERE attrelid = %s AND attnum > 0 AND NOT attisdropped ORDER BY attnum",
+        (oid,),
+    ).fetchall()
+    names = [n for n, _ in attributes]
+    fixed = ("revision", "lastrevs", "revclosed", "holes")
+    arrays = [(n, t) for n, t in attributes if n not in ("_geoid", "chunk", *fixed)]
+    # the chunk size is the aligned table's (tgsis.chunk_registry, not the role's to call): every one this client's
+    size = conn.execute(
+        "SELECT bool_and(chunksize = %s) FROM tgsis.model_tables WHERE chunkcolumn IS NOT NULL", (CHUNK_SIZE,)
+    ).fetchone()
+    if names[:2] != ["_geoid", "chunk"] or any(t not in _KINDS for _, t in arrays) or size != (True,):
+        return None  # (a layout this client does not know: the face still reads and writes it)
+    kinds = tuple((n, _KINDS[t]) for n, t in arrays)
+    columns = ChunkColumns(tuple(n for n, _ in arrays), properties=kinds, key="_geoid")
+    return PropertyChunks(table, columns, False, bool(readable), fc.schema, bool(insertable), str(name), int(oid))
+
+
+def property_request(
+    conn: Conn, fc: FeatureClass, table: str, names: Sequence[str], geoids: Sequence[int]
+) -> PackedChunks | None:
+    """The part of :func:`~tgsis.db._transfer.columns_out_all` that reads properties ``names`` from chunks, or None.
+
+    ``[_geoid, _idx, *names]`` as the face's packed read gives them (rows in id order per object), read from
+    the chunk versions; a NULL value among ``names`` is refused as there (:class:`~tgsis.errors.DatabaseError`).
+    None when the bulk read is not open (:func:`property_chunks`, or the role may not read the chunk table).
+    """
+    layout = property_chunks(conn, fc, table)
+    if layout is None or not layout.readable:
+        return None
+    return PackedChunks(layout, geoids, ["_idx", *names])
+
+
+def upload_properties(
+    conn: Conn,
+    layout: PropertyChunks,
+    geoids: Sequence[int],
+    counts: Sequence[int],
+    values: Sequence[Mapping[str, npt.NDArray[Any]]],
+) -> int:
+    """Write the properties of new geometries as chunks: ids 0..n-1 of each, one COPY and one server call.
+
+    Parameters
+    ----------
+    layout : PropertyChunks
+        Of :func:`property_chunks`, ``insertable``.
+    geoids : sequence of int
+        The geometries (distinct), new: their chunks must not be there.
+    counts : sequence of int
+        Rows of each (its vertices or cells).
+    values : sequence of mapping of str to (n_i,) ndarray
+        Per geometry, the properties it has, cast to their column types; a property of the table it lacks
+        (a collection member's) is NULL in its rows, as on rows.
+
+    Returns
+    -------
+    int
+        The chunk rows written.
+
+    Raises
+    ------
+    AlreadyExistsError
+        A chunk of one of them is there (TG201, from the server): nothing is written.
+    psycopg.errors.InsufficientPrivilege
+        The role may not INSERT into the face.
+    """
+    spec = layout.columns
+    objects = []
+    for geoid, n, given in zip(geoids, counts, values, strict=True):
+        unknown = sorted(set(given) - set(spec.names))
+        if unknown:
+            raise InvalidInputError(f"{layout.name} has no properties {unknown}")
+        columns = {name: given[name] if name in given else np.zeros(n, dtype=spec.dtype(name)) for name in spec.names}
+        nulls = {name: np.ones(n, dtype=bool) for name in spec.names if name not in given}
+        objects.append(ObjectRows(int(geoid), np.arange(n, dtype=np.int64), columns, nulls=nulls))
+    encoded = [(o.geoid, encode(o.ids, o.columns, spec, o.nulls)) for o in objects if len(o.ids)]
+    if not encoded:
+        return 0
+    staged = _staged_name(layout)
+    copy_columns = spec.copy_columns()
+    conn.execute(
+        sql.SQL("CREATE TEMP TABLE IF NOT EXISTS {} (LIKE {} INCLUDING DEFAULTS) ON COMMIT DROP").format(
+            staged, layout.relation
+        )
+    )
+    # uncompressed: the values are read once, into the server call's array (compressed there, once)
+    conn.execute(
+        sql.SQL("ALTER TABLE {} {}").format(
+            staged,
+            sql.SQL(", ").join(
+                sql.SQL("ALTER COLUMN {} SET STORAGE EXTERNAL").format(sql.Identifier(n))
+                for n in ("holes", *spec.names)
+            ),
+        )
+    )
+    statement = sql.SQL("COPY {} ({}) FROM STDIN (FORMAT binary)").format(
+        staged, sql.SQL(", ").join(map(sql.Identifier, copy_columns))
+    )
+    with conn.cursor().copy(statement) as copy:
+        for k, (geoid, chunks) in enumerate(encoded):
+            stream = to_copy(chunks, geoid, 0)
+            # one stream: the header once, the trailer once
+            copy.write(memoryview(stream)[19 if k else 0 : -2 if k < len(encoded) - 1 else None])
+    attributes = conn.execute(
+        "SELECT attname::text, attgenerated <> '', format_type(atttypid, atttypmod) FROM pg_catalog.pg_attribute "
+        "WHERE attrelid = to_regclass(%s) AND attnum > 0 AND NOT attisdropped ORDER BY attnum",
+        (layout.relation.as_string(conn),),
+    ).fetchall()
+    fields = sql.SQL(", ").join(
+        sql.SQL("NULL::{}").format(sql.SQL(typename)) if generated else sql.SQL("s.{}").format(sql.Identifier(name))
+        for name, generated, typename in attributes
+    )
+    row = conn.execute(
+        sql.SQL("SELECT tgsis.write_property_chunks({}, (SELECT array_agg(ROW({})::{}) FROM {} s))").format(
+            sql.Literal(layout.name), fields, layout.relation, staged
+        )
+    ).fetchone()
+    conn.execute(sql.SQL("TRUNCATE {}").format(staged))
+    return int(row[0]) if row is not None and row[0] is not None else 0
+
+
+def _staged_name(layout: PropertyChunks) -> sql.Composed:
+    """The session's temporary table of an upload into ``layout``'s chunk table (one per chunk table and its columns)."""
+    return sql.SQL("pg_temp.{}").format(sql.Identifier(f"tgsis_upload_{layout.oid}"))
