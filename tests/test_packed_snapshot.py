@@ -11,7 +11,7 @@ models 2 and 3 spanning many groups are bit for bit the numpy side's.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import psycopg
@@ -186,7 +186,7 @@ def test_first_times_come_back_ascending_whatever_the_groups(tx: Conn, monkeypat
 
 @pytest.mark.parametrize("model", ["EVOLVING", "INSTANTS"])
 def test_a_snapshot_is_of_one_state_whatever_commits_between_its_reads(
-    conn: Conn, db_dsn: str, monkeypatch: pytest.MonkeyPatch, model: str
+    conn: Conn, db_dsn: str, monkeypatch: pytest.MonkeyPatch, model: Literal["EVOLVING", "INSTANTS"]
 ) -> None:
     """get_at reads vertices, triangles and properties in several statements: all of one state.
 
@@ -217,7 +217,7 @@ def test_a_snapshot_is_of_one_state_whatever_commits_between_its_reads(
     conn.commit()
     assert before is not None
     reads = []
-    packed = _temporal_common.packed_out
+    packed = _transfer.packed_out
 
     def read_then_commit_another_change(*args: Any, **kwargs: Any) -> Any:
         result = packed(*args, **kwargs)
