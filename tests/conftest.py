@@ -310,6 +310,19 @@ def db_dsn(
     return make_database(built_once(*asked[0])[0] if asked else storage_template_db)
 
 
+def cloned_or_built(
+    request: pytest.FixtureRequest, conn: Conn, built_once: BuiltOnce, name: str, set_up: Callable[[Conn], int]
+) -> int:
+    """The value of a module's set-up ``set_up`` listed as ``name`` in its ``BUILT_ONCE``: the test's database is
+    its clone (``db_dsn``) when the test's module lists it so; else (a module that imports the fixture, and
+    orders its own fixtures around it) it is built on the test's connection ``conn``, as before, and committed."""
+    if getattr(request.module, "BUILT_ONCE", {}).get(name) is set_up:
+        return built_once(f"{request.module.__name__}.{name}", set_up)[1]
+    value = set_up(conn)
+    conn.commit()
+    return value
+
+
 @pytest.fixture
 def fault_clone(db_dsn: str, built_once: BuiltOnce) -> int:
     """Geoid of ``make_fault``'s fault, already in the test's database (cloned, not built again)."""

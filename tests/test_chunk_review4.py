@@ -20,6 +20,7 @@ import psycopg
 import pytest
 
 import tgsis
+from tests.conftest import BuiltOnce, cloned_or_built
 from tests.roles import login_roles
 from tgsis.db import features as F
 
@@ -323,8 +324,7 @@ def test_the_users_day_answers_the_same_on_rows_and_on_chunks(
     assert refused == [("merge v4 unsolved", ("refused", "UnsolvedConflictsError", "TG302"))], refused
 
 
-@pytest.fixture
-def chunked(conn: Conn) -> int:
+def make_chunked(conn: Conn) -> int:
     """A versioned class ``horizons`` holding a 33 x 33 grid, stored in chunks; its geoid."""
     F.create_feature_class(conn, "horizons", "SURFACE", cell_properties={"porosity": "float8"})
     tgsis.enable_feature_versioning(conn)
@@ -332,6 +332,15 @@ def chunked(conn: Conn) -> int:
     conn.commit()
     _switch(conn)
     return geoid
+
+
+BUILT_ONCE = {"chunked": make_chunked}  # built once, cloned per test (db_dsn, tests/conftest.py)
+
+
+@pytest.fixture
+def chunked(request: pytest.FixtureRequest, conn: Conn, built_once: BuiltOnce) -> int:
+    """``make_chunked``'s geoid, already in the test's database (cloned, not built again)."""
+    return cloned_or_built(request, conn, built_once, "chunked", make_chunked)
 
 
 def _outcome(conn: Conn, statement: str, params: Any = ()) -> str | None:
