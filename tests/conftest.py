@@ -9,6 +9,9 @@ database of its own, which it may change and commit as it likes.
 A test module lists set-ups of its own the same way, in a module-level
 ``BUILT_ONCE`` (fixture name -> set-up). The test's own code then no longer
 makes those calls: the clone is the database they made, in the same order.
+A module's fixture over such a set-up returns ``cloned_or_built(...)``, so that
+a module importing the fixture (and ordering its own set-up before it) still
+gets it built on the test's connection.
 
 ``--server-tests-only`` deselects the pure tests: those that never reach a
 PostgreSQL server, so give the same result on every version. A test reaches
