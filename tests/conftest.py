@@ -9,6 +9,9 @@ database of its own, which it may change and commit as it likes.
 A test module lists set-ups of its own the same way, in a module-level
 ``BUILT_ONCE`` (fixture name -> set-up). The test's own code then no longer
 makes those calls: the clone is the database they made, in the same order.
+A module's fixture over such a set-up returns ``cloned_or_built(...)``, so that
+a module importing the fixture (and ordering its own set-up before it) still
+gets it built on the test's connection.
 
 ``--server-tests-only`` deselects the pure tests: those that never reach a
 PostgreSQL server, so give the same result on every version. A test reaches
@@ -308,6 +311,19 @@ def db_dsn(
     ]
     assert len(asked) <= 1, f"a test's database is the clone of one set-up, not of {[a[0] for a in asked]}"
     return make_database(built_once(*asked[0])[0] if asked else storage_template_db)
+
+
+def cloned_or_built(
+    request: pytest.FixtureRequest, conn: Conn, built_once: BuiltOnce, name: str, set_up: Callable[[Conn], int]
+) -> int:
+    """The value of a module's set-up ``set_up`` listed as ``name`` in its ``BUILT_ONCE``: the test's database is
+    its clone (``db_dsn``) when the test's module lists it so; else (a module that imports the fixture, and
+    orders its own fixtures around it) it is built on the test's connection ``conn``, as before, and committed."""
+    if getattr(request.module, "BUILT_ONCE", {}).get(name) is set_up:
+        return built_once(f"{request.module.__name__}.{name}", set_up)[1]
+    value = set_up(conn)
+    conn.commit()
+    return value
 
 
 @pytest.fixture

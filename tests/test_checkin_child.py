@@ -20,6 +20,7 @@ import psycopg
 import pytest
 
 import tgsis
+from tests.conftest import BuiltOnce, cloned_or_built
 from tests.roles import login_roles
 from tgsis.db import features as F
 from tgsis.db import versions as V
@@ -44,12 +45,24 @@ def _grid(side: int = 20) -> tgsis.Surface:
     )
 
 
-@pytest.fixture
-def faults(conn: Conn) -> F.FeatureClass:
-    fc = F.create_feature_class(
+def make_faults(conn: Conn) -> int:
+    """The versioned class ``faults`` (a vertex property, a feature property), empty."""
+    F.create_feature_class(
         conn, "faults", "SURFACE", cell_properties={"porosity": "float8"}, feature_properties={"author": "text"}
     )
     tgsis.enable_feature_versioning(conn)
+    conn.commit()
+    return 0
+
+
+BUILT_ONCE = {"faults": make_faults}  # built once, cloned per test (db_dsn, tests/conftest.py)
+
+
+@pytest.fixture
+def faults(request: pytest.FixtureRequest, conn: Conn, built_once: BuiltOnce) -> F.FeatureClass:
+    """``make_faults``'s class, already in the test's database (cloned, not built again)."""
+    cloned_or_built(request, conn, built_once, "faults", make_faults)
+    fc = F.get_feature_class(conn, "faults")
     conn.commit()
     return fc
 

@@ -21,6 +21,7 @@ import pytest
 from psycopg import sql
 
 import tgsis
+from tests.conftest import BuiltOnce, cloned_or_built
 from tests.roles import login_roles
 from tests.test_merge_states_read import assert_identical, edit, reference_states
 from tgsis.db import _chunk_write, _merge_states
@@ -57,8 +58,7 @@ def _switch(conn: Conn) -> None:
     )
 
 
-@pytest.fixture
-def loaded(conn: Conn) -> int:
+def make_loaded(conn: Conn) -> int:
     """A versioned class ``horizons`` holding the grid, stored in chunks; its geoid."""
     F.create_feature_class(conn, "horizons", "SURFACE", cell_properties={"porosity": "float8"})
     tgsis.enable_feature_versioning(conn)
@@ -66,6 +66,15 @@ def loaded(conn: Conn) -> int:
     conn.commit()
     _switch(conn)
     return geoid
+
+
+BUILT_ONCE = {"loaded": make_loaded}  # built once, cloned per test (db_dsn, tests/conftest.py)
+
+
+@pytest.fixture
+def loaded(request: pytest.FixtureRequest, conn: Conn, built_once: BuiltOnce) -> int:
+    """``make_loaded``'s geoid, already in the test's database (cloned, not built again)."""
+    return cloned_or_built(request, conn, built_once, "loaded", make_loaded)
 
 
 def _chunk_versions(conn: Conn, table: str, geoid: int, revision: int) -> tuple[list[int], list[int]]:

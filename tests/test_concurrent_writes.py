@@ -26,6 +26,7 @@ import psycopg
 import pytest
 
 import tgsis
+from tests.conftest import BuiltOnce, cloned_or_built
 from tests.sessions import Background, connect, wait_until_blocked
 from tests.storage_data import stored_versions
 from tests.synthetic import flat_grid
@@ -389,8 +390,7 @@ def test_concurrent_increments_lose_nothing(items: Conn, db_dsn: str, version: s
 # --------------------------------------------------------------------------- bulk writers against view writers
 
 
-@pytest.fixture
-def surfaces(conn: Conn) -> tuple[Conn, int]:
+def make_surfaces(conn: Conn) -> int:
     """A versioned surface feature (3 x 3 grid) in DEFAULT, and its geoid; a child version, so that DEFAULT's
     working revision is a later one than the feature's rows (a write closes them and writes new ones)."""
     fc = F.create_feature_class(conn, "horizons", "SURFACE")
@@ -398,7 +398,16 @@ def surfaces(conn: Conn) -> tuple[Conn, int]:
     geoid = F.insert_feature(conn, fc, flat_grid(3, 0.0))
     tgsis.create_version(conn, "child")
     conn.commit()
-    return conn, geoid
+    return geoid
+
+
+BUILT_ONCE = {"surfaces": make_surfaces}  # built once, cloned per test (db_dsn, tests/conftest.py)
+
+
+@pytest.fixture
+def surfaces(request: pytest.FixtureRequest, conn: Conn, built_once: BuiltOnce) -> tuple[Conn, int]:
+    """The test's connection and ``make_surfaces``'s geoid, already in its database (cloned, not built again)."""
+    return conn, cloned_or_built(request, conn, built_once, "surfaces", make_surfaces)
 
 
 def test_a_bulk_delete_waits_for_a_view_writer_and_leaves_no_row_of_the_feature(

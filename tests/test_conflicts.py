@@ -8,22 +8,32 @@ import psycopg
 import pytest
 
 import tgsis
+from tests.conftest import BuiltOnce, cloned_or_built
 from tests.synthetic import flat_grid
 from tgsis.db import features as F
 
 Conn = psycopg.Connection[Any]
 
 
-@pytest.fixture
-def surfaces(conn: Conn) -> dict[str, int]:
-    """Three surfaces A, B, C in DEFAULT, versioned, and a child version 'edit'."""
+def make_surfaces(conn: Conn) -> int:
+    """Three surfaces A, B, C in DEFAULT, versioned, and a child version 'edit'; A's geoid (B's, C's follow)."""
     F.create_feature_class(conn, "horizons", "SURFACE", feature_properties={"note": "text"})
     tgsis.enable_feature_versioning(conn)
-    ids = {
-        name: F.insert_feature(conn, "horizons", flat_grid(4, z)) for name, z in (("A", 1.0), ("B", 2.0), ("C", 3.0))
-    }
+    ids = [F.insert_feature(conn, "horizons", flat_grid(4, z)) for z in (1.0, 2.0, 3.0)]
+    assert ids == list(range(ids[0], ids[0] + 3)), ids
     tgsis.create_version(conn, "edit")
-    return ids
+    conn.commit()
+    return ids[0]
+
+
+BUILT_ONCE = {"surfaces": make_surfaces}  # built once, cloned per test (db_dsn, tests/conftest.py)
+
+
+@pytest.fixture
+def surfaces(request: pytest.FixtureRequest, conn: Conn, built_once: BuiltOnce) -> dict[str, int]:
+    """``make_surfaces``'s surfaces by name, already in the test's database (cloned, not built again)."""
+    first = cloned_or_built(request, conn, built_once, "surfaces", make_surfaces)
+    return {name: first + i for i, name in enumerate("ABC")}
 
 
 def _move_vertex(conn: Conn, geoid: int, dz: float) -> None:

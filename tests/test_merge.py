@@ -10,25 +10,36 @@ import psycopg
 import pytest
 
 import tgsis
+from tests.conftest import BuiltOnce, cloned_or_built
 from tests.synthetic import flat_grid
 from tgsis.db import features as F
 
 Conn = psycopg.Connection[Any]
 
 
-@pytest.fixture
-def story(conn: Conn) -> dict[str, int]:
-    """Surfaces A, B, C in DEFAULT; editors' sibling versions e1 and e2."""
+def make_story(conn: Conn) -> int:
+    """Surfaces A, B, C in DEFAULT; editors' sibling versions e1 and e2; A's geoid (B's, C's follow)."""
     F.create_feature_class(conn, "horizons", "SURFACE", feature_properties={"note": "text"})
     tgsis.enable_feature_versioning(conn)
-    ids = {
-        name: F.insert_feature(conn, "horizons", flat_grid(5, z), {"note": name})
+    ids = [
+        F.insert_feature(conn, "horizons", flat_grid(5, z), {"note": name})
         for name, z in (("A", 1.0), ("B", 2.0), ("C", 3.0))
-    }
+    ]
+    assert ids == list(range(ids[0], ids[0] + 3)), ids
     tgsis.create_version(conn, "e1")
     tgsis.create_version(conn, "e2")
     conn.commit()
-    return ids
+    return ids[0]
+
+
+BUILT_ONCE = {"story": make_story}  # built once, cloned per test (db_dsn, tests/conftest.py)
+
+
+@pytest.fixture
+def story(request: pytest.FixtureRequest, conn: Conn, built_once: BuiltOnce) -> dict[str, int]:
+    """``make_story``'s surfaces by name, already in the test's database (cloned, not built again)."""
+    first = cloned_or_built(request, conn, built_once, "story", make_story)
+    return {name: first + i for i, name in enumerate("ABC")}
 
 
 def _z(conn: Conn, version: str, geoid: int) -> list[float]:

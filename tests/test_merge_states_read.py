@@ -23,6 +23,7 @@ from hypothesis import strategies as st
 from psycopg import sql
 
 import tgsis
+from tests.conftest import BuiltOnce, cloned_or_built
 from tests.merge_data import curved_surface
 from tests.roles import login_roles
 from tgsis.db import _merge_states
@@ -292,8 +293,8 @@ def edit(conn: Conn, fc: FeatureClass, version: str, geoid: int, step: tuple[str
                 )
 
 
-@pytest.fixture
-def faults(conn: Conn) -> FeatureClass:
+def make_faults(conn: Conn) -> int:
+    """The versioned class ``faults`` (a vertex and a cell property), empty."""
     F.create_feature_class(
         conn,
         "faults",
@@ -302,7 +303,19 @@ def faults(conn: Conn) -> FeatureClass:
     )
     tgsis.enable_feature_versioning(conn)
     conn.commit()
-    return tgsis.get_feature_class(conn, "faults")
+    return 0
+
+
+BUILT_ONCE = {"faults": make_faults}  # built once, cloned per test (db_dsn, tests/conftest.py)
+
+
+@pytest.fixture
+def faults(request: pytest.FixtureRequest, conn: Conn, built_once: BuiltOnce) -> FeatureClass:
+    """``make_faults``'s class, already in the test's database (cloned, not built again)."""
+    cloned_or_built(request, conn, built_once, "faults", make_faults)
+    fc = tgsis.get_feature_class(conn, "faults")
+    conn.commit()
+    return fc
 
 
 SIDES = st.lists(EDIT, min_size=1, max_size=6)

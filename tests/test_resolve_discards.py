@@ -19,6 +19,7 @@ import pytest
 from psycopg.conninfo import make_conninfo
 
 import tgsis
+from tests.conftest import BuiltOnce, cloned_or_built
 from tests.roles import login_roles
 from tgsis.cli import main
 from tgsis.db import features as F
@@ -46,14 +47,14 @@ def private_state(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.delenv("TGSIS_VERSION", raising=False)
 
 
-@pytest.fixture
-def story(conn: Conn) -> dict[str, int]:
+def make_story(conn: Conn) -> int:
     """The dome A and a flat B in DEFAULT, a child version 'edit'; both sides edit A, the version alone B.
 
     A, in the version: vertices 0, 1, 2 moved up (a part the parent leaves alone), vertex 12 (the top) up,
     vertex 6 to z = 7, the porosity of vertex 5, triangle 0 removed, vertex 25 and triangle 32 added.
     A, in DEFAULT: vertices 20, 21 moved down (another part), vertex 12 down, vertex 6 to z = 7 (the same
     edit as the version's), the porosities of vertices 5 and 7, triangle 31 removed, the feature's note.
+    Returns A's geoid (B's is the next).
     """
     F.create_feature_class(
         conn, "domes", "SURFACE", feature_properties={"note": "text"}, cell_properties={"porosity": "float8"}
@@ -83,7 +84,18 @@ def story(conn: Conn) -> dict[str, int]:
     conn.execute("DELETE FROM tgsis.trgl WHERE geoid = %s AND trglid = 31", (a,))
     conn.execute("UPDATE domes SET note = 'checked' WHERE _geoid = %s", (a,))
     conn.commit()
-    return {"A": a, "B": b}
+    assert b == a + 1, (a, b)
+    return a
+
+
+BUILT_ONCE = {"story": make_story}  # built once, cloned per test (db_dsn, tests/conftest.py)
+
+
+@pytest.fixture
+def story(request: pytest.FixtureRequest, conn: Conn, built_once: BuiltOnce) -> dict[str, int]:
+    """``make_story``'s domes A and B, already in the test's database (cloned, not built again)."""
+    a = cloned_or_built(request, conn, built_once, "story", make_story)
+    return {"A": a, "B": a + 1}
 
 
 # (table, rows added, removed, changed, values changed), per solution: what it loses of the other side

@@ -1,0 +1,85 @@
+"""The relational face over chunks (issue 40): one vertex by key and a 10,000-row UPDATE on a 1M-vertex object.
+
+Versioning on, model 1 in chunks (the default); one object of ``--n`` vertices written by
+``tgsis.write_chunk_rows``. Measured: one vertex by key through the face (``tgsis.vrtx``, the view) and
+through ``tgsis.vertex`` (one chunk by its primary key), ``tgsis.vertices`` of 1,000 ids spread over the
+object, and a 10,000-row ``UPDATE`` through the face (queued by the row trigger, written by one call of
+the writer). The baseline, in the same process: the same rows in a plain table with a primary key
+(``public.plain``), the same key read and the same UPDATE. This was tests/test_chunk_face.py's measuring
+test until 2026-12-06; the test now checks the same on 20,000 vertices. Prints ``name: value`` lines.
+
+    .venv/bin/python bench/chunk_face.py [--n 1000000]
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from typing import Any
+
+import psycopg
+from timing import bench_database, timed
+
+Conn = psycopg.Connection[Any]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--n", type=int, default=1_000_000)
+    args = parser.parse_args()
+    n = args.n
+    with bench_database() as conn:
+        conn.autocommit = False
+        conn.execute("SELECT tgsis.enable_feature_versioning()")
+        select = "SELECT 1::bigint AS geoid, i AS vrtxid, i::float8 AS x, -i::float8 AS y, 0.5::float8 AS z"
+        conn.execute(
+            f"CREATE TEMP TABLE big AS {select}, false AS _delete FROM generate_series(0::bigint, %s) i", (n - 1,)
+        )
+        conn.execute("SELECT tgsis.write_chunk_rows('vrtx', 'pg_temp.big')")
+        conn.execute(f"CREATE TABLE public.plain AS {select} FROM generate_series(0::bigint, %s) i", (n - 1,))
+        conn.execute("ALTER TABLE public.plain ADD PRIMARY KEY (geoid, vrtxid)")
+        conn.commit()
+        conn.execute("ANALYZE tgsis.vrtx_chunk")
+        conn.execute("ANALYZE public.plain")
+        conn.commit()
+        key = n * 2 // 3 + 7
+        want = [(float(key), -float(key), 0.5)]
+        face_read = "SELECT x, y, z FROM tgsis.vrtx WHERE geoid = 1 AND vrtxid = %s"
+        assert conn.execute(face_read, (key,)).fetchall() == want
+        assert conn.execute("SELECT * FROM tgsis.vertex(1, %s)", (key,)).fetchall() == want
+        face = timed(lambda: conn.execute(face_read, (key,)).fetchall(), 5)
+        function = timed(lambda: conn.execute("SELECT * FROM tgsis.vertex(1, %s)", (key,)).fetchall(), 21)
+        plain = timed(
+            lambda: conn.execute("SELECT x, y, z FROM public.plain WHERE geoid = 1 AND vrtxid = %s", (key,)).fetchall(),
+            21,
+        )
+        ids = list(range(0, n, max(1, n // 1000)))
+        many = timed(lambda: conn.execute("SELECT * FROM tgsis.vertices(1, %s)", (ids,)).fetchall(), 5)
+        conn.commit()
+        rows = min(10_000, n)
+
+        def update(table: str) -> float:
+            start = time.perf_counter()
+            done = conn.execute(f"UPDATE {table} SET z = z + 1 WHERE geoid = 1 AND vrtxid < %s", (rows,)).rowcount
+            conn.commit()
+            assert done == rows
+            return time.perf_counter() - start
+
+        through_face, plain_update = update("tgsis.vrtx"), update("public.plain")
+        print(
+            f"one vertex by key, {n}-vertex object: through the face {face * 1000:.1f} ms, tgsis.vertex "
+            f"{function * 1000:.2f} ms, a plain table {plain * 1000:.2f} ms"
+        )
+        print(f"tgsis.vertices of {len(ids)} ids: {many * 1000:.1f} ms")
+        print(f"{rows}-row UPDATE through the face {through_face:.2f} s, of the plain table {plain_update:.2f} s")
+        print(f"face_one_vertex_ms: {face * 1000:.1f}")
+        print(f"vertex_function_ms: {function * 1000:.2f}")
+        print(f"face_one_vertex_vs_plain: {face / plain:.0f}")
+        print(f"vertex_function_vs_plain: {function / plain:.1f}")
+        print(f"vertices_1000_ids_ms: {many * 1000:.1f}")
+        print(f"face_update_s: {through_face:.2f}")
+        print(f"face_update_vs_plain: {through_face / plain_update:.0f}")
+
+
+if __name__ == "__main__":
+    main()
