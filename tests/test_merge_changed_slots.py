@@ -121,12 +121,20 @@ def cells(conn: Conn, geoid: int) -> None:
     conn.commit()
 
 
+def hole(conn: Conn, geoid: int) -> None:
+    """The child deletes triangle 901 (a hole in its chunk); the parent moves one of its corners."""
+    _sql(conn, "e1", "DELETE FROM tgsis.trgl WHERE geoid = %s AND trglid = 901", (geoid,))
+    move(conn, "DEFAULT", geoid, [965], (0.5, -0.5, 0.25))
+    conn.commit()
+
+
 # scenario: (edits, the changed vertex ids, the changed cell ids, whether rows count more keys (same values again))
 SCENARIOS: dict[str, tuple[Callable[[Conn, int], None], set[int], set[int], bool]] = {
     "same_bits": (same_bits, {*MIDDLE, *EAST}, set(), True),
     "signed_zero": (signed_zero, {0, *MIDDLE}, set(), False),
     "nan_payloads": (nan_payloads, {5, *MIDDLE}, set(), False),
     "cells": (cells, {964}, {900}, True),  # (triangle 900 is (923, 924, 964))
+    "hole": (hole, {965}, {901}, False),  # (triangle 901 is (924, 925, 965))
 }
 
 
