@@ -12,7 +12,9 @@
 -- rows are read by key with the caller's rights (tgsis.storage_run), only in
 -- tables either side noted a change in since the base (tgsis.revision_objects,
 -- which tgsis.changed_objects reads too); row versions the base and both
--- sides see alike are left out before they are compared.
+-- sides see alike are left out before they are compared (of a model table
+-- stored in chunks, the slots of a changed chunk the three sets see alike too:
+-- tgsis.storage_changed_rows, so the cost is sized by the change).
 CREATE FUNCTION tgsis.conflict_discards(p_version text, p_objectclass text DEFAULT NULL, p_objectkey text DEFAULT NULL)
 RETURNS TABLE (objectclass text, objectkey text, solution text, discarded text, shortname text, tablename text,
                description text, rows_added bigint, rows_removed bigint, rows_changed bigint, values_changed bigint)
@@ -126,7 +128,14 @@ BEGIN
                    FROM lost
                   GROUP BY obj, solution, discarded
                   ORDER BY obj, solution',
-                v_t.objectkeyfield, v_rowkey, tgsis.storage_rows(v_t), NULL, tgsis.object_key_type(v_t),
+                v_t.objectkeyfield, v_rowkey,
+                -- (a model table stored in chunks: only the slots whose values or presence differ between the
+                -- three sets, tgsis.storage_changed_rows; the other slots of a changed chunk are alike everywhere)
+                CASE WHEN v_t.schemaname = 'tgsis' AND v_t.objectkeyfield = 'geoid'
+                     THEN tgsis.storage_changed_rows(v_t.schemaname, v_t.tablename, v_keys::bigint[], v_base,
+                                                     v_version.workingset, v_parent)
+                     ELSE tgsis.storage_rows(v_t) END,
+                NULL, tgsis.object_key_type(v_t),
                 v_t.keycolumns || v_t.objectkeyfield,
                 tgsis.object_key_text_sql(v_t, 'v'),  -- the key's canonical text, as the conflicts name it
                 v_differ),

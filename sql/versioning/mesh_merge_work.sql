@@ -15,9 +15,9 @@
 -- vertex properties), the cells (the class's simplex table, the cell
 -- properties, parts kept in tgsis.part as the cell value part). Rows of other
 -- keys are the same in the three states. Model-1 tables stored in chunks (issue 40) are read
--- through their decoded chunk versions (tgsis.storage_row_versions): the changed keys are then the
--- ids of the chunk versions written or closed in those revisions, a superset whose extra ids the
--- three states hold alike (they change nothing, as a row rewritten with its own values does).
+-- through their decoded chunk versions (tgsis.storage_row_versions); their changed keys are the slots of
+-- the chunks written or closed in those revisions whose values (bit for bit) or presence differ between
+-- the three states (tgsis.storage_changed_rows), so the work is sized by the change, as on rows.
 -- Then, as merge3 does:
 --   * the version's new ids are renumbered (merge3's child renumbering: a new
 --     row with the content of a parent's new row takes its id, pairing the
@@ -255,12 +255,24 @@ BEGIN
            v_cpt.tablename AS cptable, v_runs AS runs, p_times AS times, p_timem AS timem;
 
 
-    -- 1. the keys of the rows some set sees otherwise than another ($2: the revisions that tell the sets apart)
+    -- 1. the keys of the rows some set sees otherwise than another ($2: the revisions that tell the sets apart;
+    -- model 1 stored in chunks: only the slots of the changed chunks whose values or presence differ between
+    -- the three states, tgsis.storage_changed_rows, so that the work is sized by the change, not by its chunks)
     EXECUTE format('SELECT ARRAY(SELECT v.vrtxid FROM %2$s v WHERE %3$s AND %1$s ' || v_atoms || ')',
-                   v_changed, v_vsrc, v_obj)
+                   v_changed,
+                   CASE WHEN p_times IS NULL
+                        THEN tgsis.storage_changed_rows('tgsis', 'vrtx', ARRAY[p_geoid], v_base, v_parent.workingset,
+                                                        v_version.workingset)
+                        ELSE v_vsrc END,
+                   v_obj)
        INTO v_vkeys USING p_geoid, v_since;
     EXECUTE format('SELECT ARRAY(SELECT v.%1$I FROM %2$s v WHERE %4$s AND %3$s)',
-                   v_cellid, v_csrc, v_changed, v_cobj)
+                   v_cellid,
+                   CASE WHEN p_times IS NULL
+                        THEN tgsis.storage_changed_rows('tgsis', v_table, ARRAY[p_geoid], v_base, v_parent.workingset,
+                                                        v_version.workingset)
+                        ELSE v_csrc END,
+                   v_changed, v_cobj)
        INTO v_ckeys USING p_geoid, v_since;
     IF v_vcanon IS NOT NULL THEN
         v_vkeys := v_vkeys || ARRAY(SELECT r.key FROM tgsis.merge_property_rows(v_vpt, p_geoid, v_since, NULL, NULL, NULL, NULL, p_times, p_timem) AS r);

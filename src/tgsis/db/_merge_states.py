@@ -663,20 +663,6 @@ def _read_change(
     alignments = [a for a, _ in properties]
     cell_cols = (*cell_t.columns, ("_seen", "int4"))
 
-    # the rows whose visibility differs: their ids are the change (any superset of it will do)
-    changed = columns_out_all(
-        conn,
-        [
-            Packed(t.changed(s, sets, since), t.key, (*t.columns, ("_seen", "int4")), [geoid])
-            for t, s in zip([vertex_t, cell_t, *tables[4:]], [vertex_s, cell_s, *storages[4:]], strict=True)
-        ],
-    )
-    v0 = [np.asarray(changed[0][1], dtype=np.int64)]
-    c0 = [np.asarray(changed[1][1], dtype=np.int64)]
-    for alignment, columns in zip(alignments, changed[2:], strict=True):
-        (v0 if alignment == "VERTEX" else c0).append(np.asarray(columns[1], dtype=np.int64))
-    v0_ids, c0_ids = np.unique(np.concatenate(v0)), np.unique(np.concatenate(c0))
-
     def decoded_by(function: str, call: str, args: tuple[Any, ...], fallback: str) -> str:
         """The relation (a parenthesized subquery, aliased by the reads) that ``call`` of the SQL function
         ``function`` (its signature) names for ``args``; ``fallback`` for a role that may not execute it (granted to
@@ -687,6 +673,33 @@ def _read_change(
         row = conn.execute(call, args).fetchone()
         assert row is not None
         return str(row[0])
+
+    def changes(t: _Table, s: str) -> str:
+        """The relation to read the change of ``t`` from: of a table stored in chunks, only the slots of the changed
+        chunks whose values (bit for bit) or presence differ between the three states (``tgsis.storage_changed_rows``:
+        the change, not its chunks); else the storage ``s``."""
+        if s != f"tgsis.{t.view}_chunk_rows":
+            return s
+        return decoded_by(
+            "tgsis.storage_changed_rows(text, text, bigint[], integer[], integer[], integer[])",
+            "SELECT tgsis.storage_changed_rows(%s, %s, %s::bigint[], %s::integer[], %s::integer[], %s::integer[])",
+            (t.schema, t.view, [geoid], sets["base"], sets["parent"], sets["child"]),
+            s,
+        )
+
+    # the rows whose visibility differs: their ids are the change (any superset of it will do)
+    changed = columns_out_all(
+        conn,
+        [
+            Packed(t.changed(changes(t, s), sets, since), t.key, (*t.columns, ("_seen", "int4")), [geoid])
+            for t, s in zip([vertex_t, cell_t, *tables[4:]], [vertex_s, cell_s, *storages[4:]], strict=True)
+        ],
+    )
+    v0 = [np.asarray(changed[0][1], dtype=np.int64)]
+    c0 = [np.asarray(changed[1][1], dtype=np.int64)]
+    for alignment, columns in zip(alignments, changed[2:], strict=True):
+        (v0 if alignment == "VERTEX" else c0).append(np.asarray(columns[1], dtype=np.int64))
+    v0_ids, c0_ids = np.unique(np.concatenate(v0)), np.unique(np.concatenate(c0))
 
     def holding(t: _Table, s: str, ids: npt.NDArray[np.int64]) -> str:
         """The relation to read rows of ``ids`` from: of a table stored in chunks, only the chunks holding them
