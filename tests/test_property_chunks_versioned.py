@@ -138,7 +138,7 @@ def test_a_versioned_class_goes_back_to_rows_with_its_history(conn: Conn, fault_
     # SELECT and INSERT (guarded by the storage's triggers), not the grants <table>_ver had before the switch
     after = _catalog(conn, FAULTS)
     acl = [r for r in after if r[:2] == ("rel", "faults_cellpros_ver")]
-    assert acl[0][3] == "{postgres=arwdDxtm/postgres,tgsis_reader=r*/postgres,tgsis_editor=ar/postgres}"
+    assert acl[0][3].split(",")[1:] == ["tgsis_reader=r*/postgres", "tgsis_editor=ar/postgres}"]  # (after the owner's)
     assert [r for r in after if r not in acl] == [r for r in catalog if r[:2] != ("rel", "faults_cellpros_ver")]
     assert [r[:3] + r[4:] for r in acl] == [r[:3] + r[4:] for r in catalog if r[:2] == ("rel", "faults_cellpros_ver")]
     assert _every_view_rows(conn) == before
