@@ -468,6 +468,42 @@ def test_a_role_with_fewer_rights_reads_at_a_version_and_cannot_write(db_dsn: st
     assert [r[3] for r in _layer(conn, "_idx IN (3, 4)")] == [0, 5]
 
 
+def test_back_to_rows_after_compress_and_a_deleted_version_keeps_every_view(conn: Conn) -> None:
+    """Compressed chunk versions (revision numbers left as labels) and closed ones of a deleted version go back as
+    row versions that every kept set sees as before."""
+    geoid, _ = _versioned_layer(conn)
+    tgsis.create_version(conn, "e2", "e1")
+    conn.commit()
+    with tgsis.in_version(conn, "e1"):
+        conn.execute("UPDATE public.layer_cellpros SET facies = 70 WHERE _geoid = %s AND _idx = 1500", (geoid,))
+        conn.commit()
+        tgsis.save_revision(conn, "e1 saved")
+        conn.commit()
+    with tgsis.in_version(conn, "e2"):
+        conn.execute("UPDATE public.layer_cellpros SET porosity = '-0' WHERE _geoid = %s AND _idx = 2", (geoid,))
+        conn.execute("DELETE FROM public.layer_cellpros WHERE _geoid = %s AND _idx = 1599", (geoid,))
+        conn.commit()
+    tgsis.merge_version(conn, "e1")
+    conn.commit()
+    tgsis.delete_version(conn, "e2")
+    tgsis.compress_versions(conn)
+    conn.commit()
+    views = {}
+    for version, revision in every_view(conn):
+        _look(conn, version, revision)
+        views[(version, revision)] = _layer(conn)
+    conn.execute("SELECT tgsis.goto_version('DEFAULT', true)")
+    conn.commit()
+    assert conn.execute("SELECT tgsis.store_class_in_rows('layer')").fetchone() is not None
+    conn.commit()
+    for (version, revision), rows in views.items():
+        _look(conn, version, revision)
+        assert _layer(conn) == rows, (version, revision)
+    conn.execute("SELECT tgsis.goto_version('DEFAULT', true)")
+    conn.rollback()
+    assert [r[3] for r in _layer(conn, "_idx = 1500")] == [70]
+
+
 def test_a_role_with_fewer_rights_cannot_go_back_and_keeps_its_rights_after(db_dsn: str, conn: Conn) -> None:
     """Only a tgsis_admin member stores a versioned class as rows again; afterwards the reader reads at a version and
     the editor writes where its version rights let it, as before the switch."""
