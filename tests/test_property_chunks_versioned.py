@@ -504,6 +504,32 @@ def test_back_to_rows_after_compress_and_a_deleted_version_keeps_every_view(conn
     assert [r[3] for r in _layer(conn, "_idx = 1500")] == [70]
 
 
+def test_a_writer_waiting_on_the_way_back_writes_the_rows_after_it(db_dsn: str, conn: Conn) -> None:
+    """A psql write in e1 that waits for the way back's locks writes, once it commits, through the versioned view
+    on rows: its value in e1, nothing lost, DEFAULT unchanged."""
+    from tests.sessions import Background, connect, wait_until_blocked
+
+    geoid, _ = _versioned_layer(conn)
+    switcher = connect(db_dsn, "switcher")
+    assert switcher.execute("SELECT tgsis.store_class_in_rows('layer')").fetchone() is not None
+
+    def writer(session: Conn) -> None:
+        session.execute("UPDATE public.layer_cellpros SET facies = 44 WHERE _geoid = %s AND _idx = 9", (geoid,))
+
+    second = Background(db_dsn, "writer", writer, version="e1")
+    wait_until_blocked(conn, second.pid, switcher.info.backend_pid)
+    conn.rollback()
+    switcher.commit()
+    switcher.close()
+    second.finish()
+    assert conn.execute("SELECT tgsis.storage_table('public', 'layer_cellpros')").fetchone() == (
+        "public.layer_cellpros_ver",
+    )
+    with tgsis.in_version(conn, "e1"):
+        assert [r[3] for r in _layer(conn, "_idx = 9")] == [44]
+    assert [r[3] for r in _layer(conn, "_idx = 9")] == [9 % 7 - 3]
+
+
 def test_a_role_with_fewer_rights_cannot_go_back_and_keeps_its_rights_after(db_dsn: str, conn: Conn) -> None:
     """Only a tgsis_admin member stores a versioned class as rows again; afterwards the reader reads at a version and
     the editor writes where its version rights let it, as before the switch."""
