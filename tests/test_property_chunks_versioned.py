@@ -68,6 +68,128 @@ def test_a_versioned_class_switches_with_its_history(conn: Conn, fault_clone: in
     assert _every_view_rows(conn) == before
 
 
+#: what versioning made of a class table, read from the catalogs: the view (definition, defaults, comments,
+#: grants, triggers), its <table>_ver (columns, constraints, indexes, comments, grants, triggers), the queue,
+#: the write function and runner, and the registration
+CATALOG = """
+WITH r(rel) AS (VALUES (to_regclass(%(t)s::text)), (to_regclass(%(t)s::text || '_ver')), (to_regclass(%(t)s::text || '_ver_queue')))
+SELECT 'rel', c.relname, c.relkind::text, c.relacl::text, obj_description(c.oid, 'pg_class'),
+       pg_get_userbyid(c.relowner)::text, c.relrowsecurity::text
+  FROM r JOIN pg_class c ON c.oid = r.rel
+UNION ALL
+SELECT 'view', pg_get_viewdef(%(t)s::text::regclass), NULL, NULL, NULL, NULL, NULL
+UNION ALL
+SELECT 'col', c.relname || '.' || a.attname, format_type(a.atttypid, a.atttypmod), a.attnotnull::text,
+       col_description(c.oid, a.attnum), pg_get_expr(d.adbin, d.adrelid), a.attgenerated::text || a.attidentity::text
+  FROM r JOIN pg_class c ON c.oid = r.rel JOIN pg_attribute a ON a.attrelid = c.oid AND a.attnum > 0 AND NOT a.attisdropped
+  LEFT JOIN pg_attrdef d ON d.adrelid = c.oid AND d.adnum = a.attnum
+UNION ALL
+SELECT 'con', c.relname || '.' || con.conname, pg_get_constraintdef(con.oid), NULL, NULL, NULL, NULL
+  FROM r JOIN pg_class c ON c.oid = r.rel JOIN pg_constraint con ON con.conrelid = c.oid
+UNION ALL
+SELECT 'idx', c.relname, pg_get_indexdef(i.indexrelid), NULL, NULL, NULL, NULL
+  FROM r JOIN pg_class c ON c.oid = r.rel JOIN pg_index i ON i.indrelid = c.oid
+UNION ALL
+SELECT 'trg', c.relname || '.' || t.tgname, pg_get_triggerdef(t.oid), t.tgenabled::text, NULL, NULL, NULL
+  FROM r JOIN pg_class c ON c.oid = r.rel JOIN pg_trigger t ON t.tgrelid = c.oid AND NOT t.tgisinternal
+UNION ALL
+SELECT 'fn', p.oid::regprocedure::text, md5(p.prosrc), p.proacl::text, obj_description(p.oid, 'pg_proc'),
+       p.prosecdef::text, array_to_string(p.proconfig, ',')
+  FROM pg_proc p WHERE p.pronamespace = 'public'::regnamespace AND p.proname LIKE split_part(%(t)s::text, '.', 2) || '_ver_%%'
+UNION ALL
+SELECT 'reg', to_jsonb(t)::text, NULL, NULL, NULL, NULL, NULL
+  FROM tgsis.versioned_tables t WHERE format('%%I.%%I', t.schemaname, t.tablename) = %(t)s::text
+ORDER BY 1, 2, 3
+"""
+
+
+def _catalog(conn: Conn, table: str) -> list[tuple[Any, ...]]:
+    return [tuple(r) for r in conn.execute(CATALOG, {"t": table}).fetchall()]
+
+
+def test_a_versioned_class_goes_back_to_rows_with_its_history(conn: Conn, fault_clone: int) -> None:
+    """rows -> chunks -> rows: every version's and revision's rows bit for bit as before, and what versioning
+    made of the table (view, <table>_ver, queue, write function, runner, grants, comments, registration) as
+    enable_feature_versioning made it; then chunks again give the same chunk versions."""
+    varied_history(conn, fault_clone)
+    conn.execute("GRANT SELECT, INSERT, UPDATE, DELETE ON public.faults_cellpros TO tgsis_editor")
+    conn.execute("GRANT SELECT ON public.faults_cellpros TO tgsis_reader WITH GRANT OPTION")
+    conn.commit()
+    before = _every_view_rows(conn)
+    catalog = _catalog(conn, FAULTS)
+    assert len(before) >= 10 and len({tuple(v) for v in before.values()}) > 3
+    assert any(r[0] == "fn" and r[1].startswith("faults_cellpros_ver_run") for r in catalog)
+    written = conn.execute("SELECT tgsis.store_class_in_chunks('faults')").fetchone()
+    conn.commit()
+    assert written is not None
+    chunks = conn.execute(
+        "SELECT _geoid, chunk, revision, lastrevs, holes, array_send(porosity) FROM public.faults_cellpros_chunk "
+        "ORDER BY 1, 2, 3"
+    ).fetchall()
+    back = conn.execute("SELECT tgsis.store_class_in_rows('faults')").fetchone()
+    conn.commit()
+    assert back is not None and back[0] > 0
+    assert conn.execute("SELECT tgsis.storage_table('public', 'faults_cellpros')").fetchone() == (
+        "public.faults_cellpros_ver",
+    )
+    for gone in ("_chunk", "_chunk_rows", "_shape", "_face"):
+        assert conn.execute("SELECT to_regclass(%s)", (FAULTS + gone,)).fetchone() == (None,)
+    # <table>_ver's grants are made from the view's, as enable_versioning makes them from the table's: the roles'
+    # SELECT and INSERT (guarded by the storage's triggers), not the grants <table>_ver had before the switch
+    after = _catalog(conn, FAULTS)
+    acl = [r for r in after if r[:2] == ("rel", "faults_cellpros_ver")]
+    assert acl[0][3].split(",")[1:] == ["tgsis_reader=r*/postgres", "tgsis_editor=ar/postgres}"]  # (after the owner's)
+    assert [r for r in after if r not in acl] == [r for r in catalog if r[:2] != ("rel", "faults_cellpros_ver")]
+    assert [r[:3] + r[4:] for r in acl] == [r[:3] + r[4:] for r in catalog if r[:2] == ("rel", "faults_cellpros_ver")]
+    assert _every_view_rows(conn) == before
+    # and into chunks again: the same chunk versions, every view the same
+    assert conn.execute("SELECT tgsis.store_class_in_chunks('faults')").fetchone() == written
+    conn.commit()
+    assert (
+        conn.execute(
+            "SELECT _geoid, chunk, revision, lastrevs, holes, array_send(porosity) FROM public.faults_cellpros_chunk "
+            "ORDER BY 1, 2, 3"
+        ).fetchall()
+        == chunks
+    )
+    assert _every_view_rows(conn) == before
+
+
+def test_back_to_rows_a_versioned_class_keeps_working_and_solved_conflicts_solved(conn: Conn) -> None:
+    """After the way back the class is versioned on rows: writes in a version, a conflict solved while in chunks
+    stays solved (the merge takes the child's side), compress and disable work."""
+    geoid, _ = _versioned_layer(conn)
+    with tgsis.in_version(conn, "e1"):
+        conn.execute("UPDATE public.layer_cellpros SET porosity = 1.0 WHERE _geoid = %s AND _idx = 300", (geoid,))
+        conn.commit()
+    conn.execute("UPDATE public.layer_cellpros SET porosity = 2.0 WHERE _geoid = %s AND _idx = 300", (geoid,))
+    conn.commit()
+    with pytest.raises(tgsis.UnsolvedConflictsError):
+        tgsis.merge_version(conn, "e1")
+    conn.rollback()
+    tgsis.resolve_conflict(conn, "e1", "feature", geoid, "child")
+    conn.commit()
+    assert conn.execute("SELECT tgsis.store_class_in_rows('layer')").fetchone() is not None
+    conn.commit()
+    tgsis.merge_version(conn, "e1")  # solved while in chunks: still solved
+    conn.commit()
+    assert [r[2] for r in _layer(conn, "_idx = 300")] == [struct.pack(">d", 1.0)]
+    with tgsis.in_version(conn, "e1"):
+        conn.execute("UPDATE public.layer_cellpros SET facies = 33 WHERE _geoid = %s AND _idx = 5", (geoid,))
+        conn.commit()
+        assert [r[3] for r in _layer(conn, "_idx = 5")] == [33]
+    assert [r[3] for r in _layer(conn, "_idx = 5")] == [5 % 7 - 3]
+    assert conn.execute("SELECT count(*) FROM public.layer_cellpros_ver WHERE revision <> 0").fetchone() != (0,)
+    tgsis.merge_version(conn, "e1")
+    tgsis.compress_versions(conn)
+    conn.commit()
+    assert [r[3] for r in _layer(conn, "_idx = 5")] == [33]
+    final = _layer(conn)
+    tgsis.disable_feature_versioning(conn, force=True)
+    conn.commit()
+    assert _layer(conn) == final
+
+
 # --------------------------------------------------------------------------- the same operations on rows and on chunks
 
 #: float8 bit patterns that must survive: -0.0, the smallest subnormal, a NaN with a payload, 1 + 1 ulp
@@ -258,9 +380,24 @@ def test_what_is_not_built_for_a_versioned_class_is_refused_by_name(conn: Conn) 
     geoid, _ = _versioned_layer(conn)
     before = _layer(conn)
     chunks = conn.execute("SELECT count(*) FROM public.layer_cellpros_chunk").fetchone()
-    state, message = sqlstate(conn, "SELECT tgsis.store_class_in_rows('layer')")
-    assert state == "TG300" and "versioned" in message
+    catalog = _catalog(conn, "public.layer_cellpros")
     assert sqlstate(conn, "SELECT tgsis.store_class_in_chunks('layer')")[0] == "TG201"
+    # the way back of a versioned class: a user's view over the face blocks it by name, nothing changed
+    conn.execute("CREATE VIEW public.layer_mine AS SELECT * FROM public.layer_cellpros")
+    state, message = sqlstate(conn, "SELECT tgsis.store_class_in_rows('layer')")
+    assert state == "2BP01" and "layer_mine" in message
+    conn.execute("DROP VIEW public.layer_mine")
+    # a chunk version the row definition does not allow (a NULL value written past the checks): refused by the
+    # row versions' constraint, nothing changed
+    conn.execute("ALTER TABLE public.layer_cellpros_chunk DISABLE TRIGGER USER")
+    conn.execute("UPDATE public.layer_cellpros_chunk SET porosity[5] = NULL WHERE chunk = 0 AND revision = 0")
+    state, message = sqlstate(conn, "SELECT tgsis.store_class_in_rows('layer')")
+    assert state == "23502" and "porosity" in message and "layer_cellpros_ver" in message, message
+    conn.rollback()
+    assert conn.execute("SELECT tgsis.storage_table('public', 'layer_cellpros')").fetchone() == (
+        "public.layer_cellpros_chunk",
+    )
+    assert _catalog(conn, "public.layer_cellpros") == catalog
     assert _layer(conn) == before
     assert conn.execute("SELECT count(*) FROM public.layer_cellpros_chunk").fetchone() == chunks
     assert geoid > 0
@@ -329,6 +466,147 @@ def test_a_role_with_fewer_rights_reads_at_a_version_and_cannot_write(db_dsn: st
     with tgsis.in_version(conn, "e1"):
         assert [r[3] for r in _layer(conn, "_idx IN (3, 4)")] == [7, 1]  # e1 sees its own, not DEFAULT's later write
     assert [r[3] for r in _layer(conn, "_idx IN (3, 4)")] == [0, 5]
+
+
+def test_back_to_rows_after_compress_and_a_deleted_version_keeps_every_view(conn: Conn) -> None:
+    """Compressed chunk versions (revision numbers left as labels) and closed ones of a deleted version go back as
+    row versions that every kept set sees as before."""
+    geoid, _ = _versioned_layer(conn)
+    tgsis.create_version(conn, "e2", "e1")
+    conn.commit()
+    with tgsis.in_version(conn, "e1"):
+        conn.execute("UPDATE public.layer_cellpros SET facies = 70 WHERE _geoid = %s AND _idx = 1500", (geoid,))
+        conn.commit()
+        tgsis.save_revision(conn, "e1 saved")
+        conn.commit()
+    with tgsis.in_version(conn, "e2"):
+        conn.execute("UPDATE public.layer_cellpros SET porosity = '-0' WHERE _geoid = %s AND _idx = 2", (geoid,))
+        conn.execute("DELETE FROM public.layer_cellpros WHERE _geoid = %s AND _idx = 1599", (geoid,))
+        conn.commit()
+    tgsis.merge_version(conn, "e1")
+    conn.commit()
+    tgsis.delete_version(conn, "e2")
+    tgsis.compress_versions(conn)
+    conn.commit()
+    views = {}
+    for version, revision in every_view(conn):
+        _look(conn, version, revision)
+        views[(version, revision)] = _layer(conn)
+    conn.execute("SELECT tgsis.goto_version('DEFAULT', true)")
+    conn.commit()
+    assert conn.execute("SELECT tgsis.store_class_in_rows('layer')").fetchone() is not None
+    conn.commit()
+    for (version, revision), rows in views.items():
+        _look(conn, version, revision)
+        assert _layer(conn) == rows, (version, revision)
+    conn.execute("SELECT tgsis.goto_version('DEFAULT', true)")
+    conn.rollback()
+    assert [r[3] for r in _layer(conn, "_idx = 1500")] == [70]
+
+
+def test_a_writer_waiting_on_the_way_back_writes_the_rows_after_it(db_dsn: str, conn: Conn) -> None:
+    """A psql write in e1 that waits for the way back's locks writes, once it commits, through the versioned view
+    on rows: its value in e1, nothing lost, DEFAULT unchanged."""
+    from tests.sessions import Background, connect, wait_until_blocked
+
+    geoid, _ = _versioned_layer(conn)
+    switcher = connect(db_dsn, "switcher")
+    assert switcher.execute("SELECT tgsis.store_class_in_rows('layer')").fetchone() is not None
+
+    def writer(session: Conn) -> None:
+        session.execute("UPDATE public.layer_cellpros SET facies = 44 WHERE _geoid = %s AND _idx = 9", (geoid,))
+
+    second = Background(db_dsn, "writer", writer, version="e1")
+    wait_until_blocked(conn, second.pid, switcher.info.backend_pid)
+    conn.rollback()
+    switcher.commit()
+    switcher.close()
+    second.finish()
+    assert conn.execute("SELECT tgsis.storage_table('public', 'layer_cellpros')").fetchone() == (
+        "public.layer_cellpros_ver",
+    )
+    with tgsis.in_version(conn, "e1"):
+        assert [r[3] for r in _layer(conn, "_idx = 9")] == [44]
+    assert [r[3] for r in _layer(conn, "_idx = 9")] == [9 % 7 - 3]
+
+
+def test_a_role_with_fewer_rights_cannot_go_back_and_keeps_its_rights_after(db_dsn: str, conn: Conn) -> None:
+    """Only a tgsis_admin member stores a versioned class as rows again; afterwards the reader reads at a version and
+    the editor writes where its version rights let it, as before the switch."""
+    from tests.roles import login_roles
+
+    geoid, _ = _versioned_layer(conn)
+    # (written by a session that ends: a session that wrote through the face and is still open blocks the way back)
+    with psycopg.connect(db_dsn) as writer:
+        with tgsis.in_version(writer, "e1"):
+            writer.execute("UPDATE public.layer_cellpros SET facies = 7 WHERE _geoid = %s AND _idx = 3", (geoid,))
+            writer.commit()
+    with login_roles(db_dsn, {"reader": "tgsis_reader", "editor": "tgsis_editor", "admin": "tgsis_admin"}) as roles:
+        for short in ("reader", "editor"):
+            session = roles.connect(short)
+            assert sqlstate(session, "SELECT tgsis.store_class_in_rows('layer')")[0] == "42501"
+            session.close()
+        assert conn.execute("SELECT tgsis.storage_table('public', 'layer_cellpros')").fetchone() == (
+            "public.layer_cellpros_chunk",
+        )
+        admin = roles.connect("admin")
+        assert sqlstate(admin, "SELECT tgsis.store_class_in_rows('layer')") == (None, "")
+        admin.commit()
+        admin.close()
+        assert conn.execute("SELECT tgsis.storage_table('public', 'layer_cellpros')").fetchone() == (
+            "public.layer_cellpros_ver",
+        )
+        reader = roles.connect("reader")
+        tgsis.goto_version(reader, "e1")
+        assert reader.execute(
+            "SELECT facies FROM public.layer_cellpros WHERE _geoid = %s AND _idx = 3", (geoid,)
+        ).fetchone() == (7,)
+        update = "UPDATE public.layer_cellpros SET facies = 5 WHERE _geoid = %s AND _idx = 4"
+        assert sqlstate(reader, update, (geoid,))[0] == "42501"
+        assert sqlstate(reader, "UPDATE public.layer_cellpros_ver SET facies = 0")[0] == "42501"
+        reader.rollback()
+        editor = roles.connect("editor")
+        tgsis.goto_version(editor, "e1")  # not the editor's version: no write right there
+        assert sqlstate(editor, update, (geoid,))[0] == "TG002"
+        tgsis.goto_version(editor, "DEFAULT")
+        assert sqlstate(editor, update, (geoid,)) == (None, "")
+        assert sqlstate(editor, "DELETE FROM public.layer_cellpros_ver")[0] == "42501"
+        editor.commit()
+    with tgsis.in_version(conn, "e1"):
+        assert [r[3] for r in _layer(conn, "_idx IN (3, 4)")] == [7, 1]
+    assert [r[3] for r in _layer(conn, "_idx IN (3, 4)")] == [0, 5]
+
+
+def test_a_property_added_to_a_versioned_class_in_chunks_keeps_every_view(conn: Conn) -> None:
+    """add_property on a versioned class in chunks (refused, TG300, while the class could not go back to rows):
+    every version's and revision's values of the other properties bit for bit as before, the new one in every row,
+    the class in chunks again."""
+    geoid, _ = _versioned_layer(conn)
+    with tgsis.in_version(conn, "e1"):
+        conn.execute("UPDATE public.layer_cellpros SET facies = 7 WHERE _geoid = %s AND _idx = 3", (geoid,))
+        conn.commit()
+        tgsis.save_revision(conn, "after e1's edit")
+        conn.commit()
+    views = {}
+    for version, revision in every_view(conn):
+        _look(conn, version, revision)
+        views[(version, revision)] = _layer(conn)
+    conn.execute("SELECT tgsis.goto_version('DEFAULT', true)")
+    conn.commit()
+    assert len({tuple(v) for v in views.values()}) > 1
+    tgsis.add_property(conn, "layer", ("grain", "real"), default="0.5")
+    conn.commit()
+    assert conn.execute("SELECT tgsis.storage_table('public', 'layer_cellpros')").fetchone() == (
+        "public.layer_cellpros_chunk",
+    )
+    for (version, revision), rows in views.items():
+        _look(conn, version, revision)
+        assert _layer(conn) == rows, (version, revision)
+        assert conn.execute(
+            "SELECT count(*), count(*) FILTER (WHERE grain = 0.5) FROM public.layer_cellpros"
+        ).fetchone() == (len(rows), len(rows))
+    conn.execute("SELECT tgsis.goto_version('DEFAULT', true)")
+    conn.rollback()
 
 
 #: the chunk versions with their arrays' send forms (doubles by their bits)

@@ -85,11 +85,13 @@ BEGIN
         END IF;
     END LOOP;
     -- the grants of today's relation (what the face replaces), else the storage's
-    FOR v_acl IN SELECT a.privilege_type, a.grantee FROM pg_class c, aclexplode(c.relacl) AS a
+    -- (grant options kept: the way back to rows copies the face's grants, tgsis.store_class_in_rows)
+    FOR v_acl IN SELECT a.privilege_type, a.grantee, a.is_grantable FROM pg_class c, aclexplode(c.relacl) AS a
                   WHERE c.oid = coalesce(v_today, v_chunk) AND a.grantee <> c.relowner
                     AND a.privilege_type IN ('SELECT', 'INSERT', 'UPDATE', 'DELETE') LOOP
-        EXECUTE format('GRANT %s ON %s TO %s', v_acl.privilege_type, v_face,
-                       CASE WHEN v_acl.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_acl.grantee)) END);
+        EXECUTE format('GRANT %s ON %s TO %s%s', v_acl.privilege_type, v_face,
+                       CASE WHEN v_acl.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_acl.grantee)) END,
+                       CASE WHEN v_acl.is_grantable THEN ' WITH GRANT OPTION' ELSE '' END);
     END LOOP;
     EXECUTE format('CREATE TRIGGER tgsis_chunk_face INSTEAD OF INSERT OR UPDATE OR DELETE ON %s '
                    'FOR EACH ROW EXECUTE FUNCTION tgsis.chunk_face_write(%L)', v_face, p_table);

@@ -18,11 +18,11 @@
 -- properties are in chunks (tgsis.version_class_tables). add_property,
 -- rename_property and drop_property convert the table back to rows and to
 -- chunks again around the change (tgsis.alter_class_table; a versioned class
--- cannot go back to rows yet, so they are refused for it, TG300);
+-- too, with its history);
 -- drop_feature_class drops the chunk table with the class. The Python upload
 -- and download of an unversioned class move whole chunks
 -- (tgsis.write_property_chunks, src/tgsis/db/_property_chunks.py).
--- tgsis.store_class_in_rows goes back (not for a versioned class: TG300).
+-- tgsis.store_class_in_rows goes back, a versioned class with its history.
 -- Vector properties have no chunk form yet (TG100, tgsis.chunk_columns).
 -- A table with row-level security, policies, a user's trigger, or a view or
 -- foreign key over it is refused by name (TG202): a view can carry none of

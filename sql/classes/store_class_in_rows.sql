@@ -4,10 +4,20 @@
 -- definition kept (<class>_cellpros_shape: columns, NOT NULLs, CHECKs, key,
 -- comments) with the face's grants, filled from every chunk version and
 -- verified value for value (tgsis.chunks_to_rows); then the chunk table, its
--- view and the shape go. A user's view over the face blocks it (PostgreSQL's
--- 2BP01 names the view; nothing changed). A versioned class is refused by
--- name (TG300, nothing changed): its way back is not built. tgsis_admin members; SECURITY
--- DEFINER as tgsis's owner owns the class's tables. Returns the rows written.
+-- view and the shape go. A versioned class goes back with its history: the
+-- table, empty, is versioned again by tgsis.enable_versioning_rel (its
+-- <table>_ver, versioned view, queue, write function and runner made as
+-- enable_feature_versioning makes them, the registration's other fields --
+-- when and by whom versioning was enabled, the table's comment -- kept), every
+-- chunk version written as row versions of <table>_ver with its revision and
+-- lastrevs and verified against every version's and revision's set
+-- (tgsis.check_chunk_conversion) before the chunks go, the conflicts' marks
+-- renewed (solved conflicts stay solved), as tgsis.store_class_in_chunks
+-- does the other way. Row versions a chunk's versions share are repeated per
+-- version (tgsis.chunks_to_rows): what every set sees is kept, not the count
+-- of row versions. A user's view over the face blocks it (PostgreSQL's 2BP01
+-- names the view; nothing changed). tgsis_admin members; SECURITY DEFINER as
+-- tgsis's owner owns the class's tables. Returns the rows written.
 CREATE FUNCTION tgsis.store_class_in_rows(p_class text)
 RETURNS bigint
 LANGUAGE plpgsql
@@ -22,6 +32,8 @@ DECLARE
     v_shape regclass;
     v_c     record;
     v_n     bigint;
+    v_versioned tgsis.versioned_tables;
+    v_marks jsonb;
 BEGIN
     v_class := tgsis.class_for_change(p_class, 'store as rows the');  -- TG002, TG200
     v_name := format('%I.%I', v_class.schemaname, v_class.cellprotable);
@@ -30,13 +42,14 @@ BEGIN
         RAISE EXCEPTION 'the properties of feature class % are not stored in chunks', coalesce(quote_literal(p_class), 'NULL')
             USING ERRCODE = 'TG200', DETAIL = 'Only what tgsis.store_class_in_chunks stored goes back to rows.';
     END IF;
-    IF EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = v_class.schemaname AND t.tablename = v_class.cellprotable) THEN
-        RAISE EXCEPTION 'the properties of feature class % cannot be stored as rows again while the class is versioned', p_class
-            USING ERRCODE = 'TG300',
-                  DETAIL = format('%s holds the chunk versions of every version; the way back of a versioned class (its '
-                                  '<table>_ver and versioned view made from them) is not built. Nothing was changed.',
-                                  tgsis.chunk_relation(v_name, '_chunk')),
-                  HINT = 'keep the properties in chunks, or store them as rows before versioning is enabled';
+    SELECT * INTO v_versioned FROM tgsis.versioned_tables t
+     WHERE t.schemaname = v_class.schemaname AND t.tablename = v_class.cellprotable;
+    IF v_versioned.tablename IS NOT NULL THEN
+        -- the versions' sets stay as they are until the switch is done (as tgsis.chunks_to_rows holds them); the
+        -- conflicts' marks fingerprint the stored versions, which the switch changes without changing what any
+        -- version sees: read before, renewed after (tgsis.renew_conflict_marks)
+        PERFORM FROM tgsis.versions v ORDER BY v.versionid FOR SHARE;
+        v_marks := tgsis.conflict_marks();
     END IF;
     v_face := v_name::regclass;
     EXECUTE format('LOCK TABLE %s IN SHARE ROW EXCLUSIVE MODE', tgsis.chunk_relation(v_name, '_chunk'));
@@ -45,10 +58,24 @@ BEGIN
     EXECUTE format('ALTER TABLE %s DROP CONSTRAINT %I', v_name, v_class.cellprotable || '_shape_holds_no_rows');
     FOR v_c IN SELECT con.conname, pg_get_constraintdef(con.oid) AS def FROM pg_constraint con
                 WHERE con.conrelid = v_shape AND con.contype = 'p' LOOP
-        EXECUTE format('ALTER TABLE %s ADD CONSTRAINT %I %s', v_name, v_class.cellprotable || '_pkey', v_c.def);
+        EXECUTE format('ALTER TABLE %s ADD CONSTRAINT %I %s', v_name,
+                       coalesce(v_versioned.pkeyname, v_class.cellprotable || '_pkey'), v_c.def);
     END LOOP;
-    EXECUTE format('COMMENT ON TABLE %s IS %L', v_name, split_part(obj_description(v_face, 'pg_class'), ', stored in chunks (', 1));
+    EXECUTE format('COMMENT ON TABLE %s IS %L', v_name,
+                   CASE WHEN v_versioned.tablename IS NOT NULL THEN v_versioned.tablecomment  -- the table's own, before versioning
+                        ELSE split_part(obj_description(v_face, 'pg_class'), ', stored in chunks (', 1) END);
     PERFORM tgsis.copy_relation_rights(v_face, v_name::regclass);  -- the face's grants, grant options kept
+    IF v_versioned.tablename IS NOT NULL THEN
+        -- versioned again as tgsis.version_class_tables versions it (the empty table becomes <table>_ver behind the
+        -- versioned view, with the face's grants), then registered with what the registration said before
+        DELETE FROM tgsis.versioned_tables t WHERE t.schemaname = v_versioned.schemaname AND t.tablename = v_versioned.tablename;
+        PERFORM tgsis.enable_versioning_rel(v_name::regclass, v_versioned.objectkeyfield, v_versioned.objectclass,
+                                            v_versioned.iudorder, v_versioned.shortname);
+        UPDATE tgsis.versioned_tables t
+           SET tablecomment = v_versioned.tablecomment, identity_always = v_versioned.identity_always,
+               enabled_at = v_versioned.enabled_at, enabled_by = v_versioned.enabled_by
+         WHERE t.schemaname = v_versioned.schemaname AND t.tablename = v_versioned.tablename;
+    END IF;
     v_n := tgsis.chunks_to_rows(v_name);  -- verified (TG000: nothing changed)
     -- this session's tables of rows written through the face (tgsis.chunk_face_write) are of its row type; another
     -- session's block the DROP below by name (2BP01: nothing changed)
@@ -57,6 +84,10 @@ BEGIN
     EXECUTE format('DROP VIEW %s', tgsis.chunk_relation(v_name, '_chunk_rows'));
     EXECUTE format('DROP TABLE %s', tgsis.chunk_relation(v_name, '_chunk'));
     EXECUTE format('DROP TABLE %s', v_shape);
+    IF v_versioned.tablename IS NOT NULL THEN
+        EXECUTE format('ANALYZE %I.%I', v_class.schemaname, v_class.cellprotable || '_ver');
+        PERFORM tgsis.renew_conflict_marks(v_marks);
+    END IF;
     RETURN v_n;
 END
 $$;
@@ -65,4 +96,4 @@ REVOKE ALL ON FUNCTION tgsis.store_class_in_rows(text) FROM PUBLIC;
 GRANT EXECUTE ON FUNCTION tgsis.store_class_in_rows(text) TO tgsis_admin;
 
 COMMENT ON FUNCTION tgsis.store_class_in_rows(text) IS
-    'store a class''s property table as rows again after tgsis.store_class_in_chunks (tgsis_admin members): the table made from its kept row definition with the face''s grants, filled from the chunks and verified (tgsis.chunks_to_rows), the face, chunk view, chunk table and shape dropped; TG200 when not stored in chunks, TG300 for a versioned class; returns the rows written';
+    'store a class''s property table as rows again after tgsis.store_class_in_chunks (tgsis_admin members): the table made from its kept row definition with the face''s grants, filled from the chunks and verified (tgsis.chunks_to_rows), the face, chunk view, chunk table and shape dropped; a versioned class versioned again (tgsis.enable_versioning_rel, its registration kept) with every chunk version as row versions of <table>_ver, verified against every version''s and revision''s set, the conflicts'' marks renewed; TG200 when not stored in chunks; returns the rows written';

@@ -66,10 +66,12 @@ BEGIN
     END LOOP;
     EXECUTE format('COMMENT ON VIEW %I.%I IS %L', p_schema, p_table, p_comment);
     FOR v_acl IN
-        SELECT a.privilege_type, a.grantee FROM aclexplode(p_grants) AS a WHERE a.grantee <> v_owner
+        SELECT a.privilege_type, a.grantee, a.is_grantable FROM aclexplode(p_grants) AS a WHERE a.grantee <> v_owner
     LOOP
-        EXECUTE format('GRANT %s ON %I.%I TO %s', v_acl.privilege_type, p_schema, p_table,
-                       CASE WHEN v_acl.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_acl.grantee)) END);
+        -- (grant options kept: a role that could pass a right on the table can pass it on the view)
+        EXECUTE format('GRANT %s ON %I.%I TO %s%s', v_acl.privilege_type, p_schema, p_table,
+                       CASE WHEN v_acl.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_acl.grantee)) END,
+                       CASE WHEN v_acl.is_grantable THEN ' WITH GRANT OPTION' ELSE '' END);
     END LOOP;
     PERFORM tgsis.create_versioning_trigger(p_schema, p_table, p_keys, p_pkey, p_objectclass, p_keyfield);
     EXECUTE format('CREATE TRIGGER tgsis_versioning_rights BEFORE INSERT OR UPDATE OR DELETE ON %I.%I '
