@@ -179,6 +179,14 @@ def test_what_chunks_cannot_hold_is_refused_by_name_nothing_changed(conn: Conn) 
     ):
         state, message = sqlstate(conn, statement)
         assert state == "TG100" and any(w in message for w in ("normal", "holes", "vtop")), (statement, state, message)
+    # a user's view over the face: refused by name (TG202), nothing changed
+    conn.execute("CREATE VIEW public.odd_view AS SELECT _geoid, p_b FROM public.odd_cellpros")
+    conn.commit()
+    state, message = sqlstate(conn, "SELECT tgsis.drop_property('odd', 'p_i4', p_force => true)")
+    assert state == "TG202" and "odd_view" in message, message
+    assert _arrays(conn, "odd") == before
+    conn.execute("DROP VIEW public.odd_view")
+    conn.commit()
     tgsis.drop_property(conn, "odd", "p_i4", force=True)
     tgsis.drop_property(conn, "odd", "p_f8", force=True)
     conn.commit()
