@@ -312,3 +312,35 @@ def test_add_rename_drop_in_place_on_a_versioned_class(conn: Conn) -> None:
     conn.commit()
     assert _oid(conn, "layer") == oid
     assert _every_view(conn, "float8send(phi), facies") == views
+
+
+def test_a_solved_conflict_stays_solved_across_an_add_in_place(conn: Conn) -> None:
+    surface = curved_surface()
+    n = surface.n_vertices
+    tgsis.create_feature_class(
+        conn, "layer", "SURFACE", cell_properties=[("porosity", "double precision"), ("facies", "integer")]
+    )
+    tgsis.enable_feature_versioning(conn)
+    props: dict[str, Any] = {"porosity": np.linspace(0, 1, n), "facies": np.arange(n, dtype=np.int32) % 7}
+    geoid = F.insert_feature(conn, "layer", Surface(surface.vertices, surface.cells, vertex_properties=props))
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    conn.execute("SELECT tgsis.store_class_in_chunks('layer')")
+    conn.commit()
+    with tgsis.in_version(conn, "e1"):
+        conn.execute("UPDATE public.layer_cellpros SET porosity = 1.0 WHERE _geoid = %s AND _idx = 3", (geoid,))
+    conn.execute("UPDATE public.layer_cellpros SET porosity = 2.0 WHERE _geoid = %s AND _idx = 3", (geoid,))
+    conn.commit()
+    try:
+        tgsis.merge_version(conn, "e1")
+        raise AssertionError("the same vertex changed on both sides merged without a conflict")
+    except tgsis.UnsolvedConflictsError:
+        conn.rollback()
+    tgsis.resolve_conflict(conn, "e1", "feature", geoid, "child")
+    conn.commit()
+    tgsis.add_property(conn, "layer", ("grade", "smallint"), default="9")
+    conn.commit()
+    tgsis.merge_version(conn, "e1")  # still solved: the change altered no value a version sees
+    conn.commit()
+    row = conn.execute("SELECT porosity, grade FROM public.layer_cellpros WHERE _geoid = %s AND _idx = 3", (geoid,))
+    assert row.fetchone() == (1.0, 9)
