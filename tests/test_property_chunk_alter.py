@@ -344,3 +344,31 @@ def test_a_solved_conflict_stays_solved_across_an_add_in_place(conn: Conn) -> No
     conn.commit()
     row = conn.execute("SELECT porosity, grade FROM public.layer_cellpros WHERE _geoid = %s AND _idx = 3", (geoid,))
     assert row.fetchone() == (1.0, 9)
+
+
+def test_pg_dump_and_restore_after_changes_in_place(pg: Any, db_dsn: str, conn: Conn, tmp_path: Any) -> None:
+    from tests.test_backup import _bindir_of, _restored
+
+    surface = curved_surface()
+    values = _values(surface.n_vertices)
+    values["p_f8"][2] = float(
+        "nan"
+    )  # (a NaN payload does not survive pg_dump's text COPY of a double array, as before)
+    _class(conn, "kept")
+    geoid = F.insert_feature(conn, "kept", Surface(surface.vertices, surface.cells, vertex_properties=values))
+    conn.execute("SELECT tgsis.store_class_in_chunks('kept')")
+    conn.commit()
+    tgsis.add_property(conn, "kept", ("p_new", "smallint"), default="4")
+    tgsis.drop_property(conn, "kept", "p_i4", force=True)  # a dropped column left in the chunk table
+    tgsis.rename_property(conn, "kept", "p_f8", "p_d")
+    conn.commit()
+    arrays = _arrays(conn, "kept")
+    conn.rollback()
+    with _restored(pg, _bindir_of(pg), db_dsn, "custom", tmp_path) as dsn, psycopg.connect(dsn) as copy:
+        assert list(_arrays(copy, "kept").values()) == list(arrays.values())
+        copy.execute("UPDATE public.kept_cellpros SET p_new = 5 WHERE _geoid = %s AND _idx = 1", (geoid,))
+        copy.commit()
+        assert copy.execute("SELECT p_new FROM public.kept_cellpros WHERE _idx IN (0, 1) ORDER BY _idx").fetchall() == [
+            (4,),
+            (5,),
+        ]
