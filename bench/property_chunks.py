@@ -13,9 +13,11 @@ same run: ``insert_feature`` and ``fetch_feature`` of the same surface in three 
 ``tgsis.write_property_chunks``, read back from the chunks); the property's share is each time less the
 bare mesh's, and the property's part of the fetch's query is timed alone (``property_read``). ``--face`` also
 times the path before the bulk one (the face's rows, its trigger row by row) on a surface of ``--face-side``
-(the face's upload takes milliseconds a row). Prints ``name: value`` lines.
+(the face's upload takes milliseconds a row). ``--alter`` times instead add_property, rename_property and
+drop_property on the class in chunks (in place, ``tgsis.alter_chunk_table``) and, unversioned, the round trip
+through rows that an add cost before, in the same run. Prints ``name: value`` lines.
 
-    .venv/bin/python bench/property_chunks.py [--side 1000] [--order spatial|file] [--versioned] [--repeat 3] [--face]
+    .venv/bin/python bench/property_chunks.py [--side 1000] [--order spatial|file] [--versioned] [--repeat 3] [--face] [--alter]
 """
 
 from __future__ import annotations
@@ -98,6 +100,33 @@ def transfer(
     return {k: statistics.median(v) for k, v in times.items()}
 
 
+def alter(conn: Conn, round_trip: bool) -> None:
+    """Time add/rename/drop of a property in place on the class in chunks; the round trip's add too when unversioned.
+
+    The round trip is what ``tgsis.alter_class_table`` did before the change in place (and cannot do for a
+    versioned class): ``store_class_in_rows``, the ALTER on rows, ``store_class_in_chunks``, each verified.
+    """
+    timed = {}
+    for name, call in (
+        ("add", lambda: tgsis.add_property(conn, "horizon", ("grade", "integer"), default="1")),
+        ("rename", lambda: tgsis.rename_property(conn, "horizon", "grade", "grade2")),
+        ("drop", lambda: tgsis.drop_property(conn, "horizon", "grade2", force=True)),
+    ):
+        timed[name] = seconds(lambda call=call: (call(), conn.commit()))
+        print(f"in_place_{name}_s: {timed[name]:.2f}")
+    if round_trip:
+
+        def trip() -> None:
+            conn.execute("SELECT tgsis.store_class_in_rows('horizon')")
+            tgsis.add_property(conn, "horizon", ("grade", "integer"), default="1")
+            conn.execute("SELECT tgsis.store_class_in_chunks('horizon')")
+            conn.commit()
+
+        trip_s = seconds(trip)
+        print(f"round_trip_add_s: {trip_s:.2f}")
+        print(f"in_place_add_to_round_trip: {timed['add'] / trip_s:.3f}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--side", type=int, default=1000)
@@ -106,6 +135,9 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--face", action="store_true", help="also the face's row-by-row path, on --face-side")
     parser.add_argument("--face-side", type=int, default=100)
+    parser.add_argument(
+        "--alter", action="store_true", help="time add/rename/drop property in place (and the round trip) instead"
+    )
     args = parser.parse_args()
     surface = grid_surface(args.side)
     n = surface.n_vertices
@@ -149,9 +181,11 @@ def main() -> None:
         print(f"fetch_feature_through_the_face_s: {time.perf_counter() - start:.2f}")
         assert isinstance(fetched, tgsis.Surface) and fetched.n_vertices == n
         conn.autocommit = False
+        if args.alter:
+            alter(conn, not args.versioned)
         tgsis.drop_feature_class(conn, "horizon", force=True)
         conn.commit()
-        if args.versioned:
+        if args.versioned or args.alter:
             return
         runs = [("", surface, False)]
         if args.face:

@@ -14,14 +14,15 @@
 -- Views of others over the class's tables would read a column that changed:
 -- they are refused (TG202), nothing changed. Runs as the owner of the
 -- class's tables (tgsis's): called by add_property, rename_property and
--- drop_property. A property table stored in chunks (tgsis.store_class_in_chunks)
--- is stored as rows first (tgsis.store_class_in_rows, verified value for
--- value), altered as rows, and stored in chunks again (verified too): the
--- chunk table, its views and the face are made anew over the new columns,
--- the face with the table's grants and comments. Correct, but it converts the
--- whole table twice (its cost is the table's size, not the change's); what the
--- new columns cannot be in chunks (a vector property, a reserved name) is
--- refused by store_class_in_chunks by name (TG100), nothing changed.
+-- drop_property. A property table stored in chunks (tgsis.store_class_in_chunks),
+-- versioned or not, is altered in place (tgsis.alter_chunk_table): the ALTERs
+-- on its row definition <table>_shape, the chunk table's arrays added (the
+-- default at present slots, NULL at holes, in every chunk version), renamed or
+-- dropped, the chunk view and the face made again with the face's grants and
+-- the columns' comments; the conflicts' marks of a versioned class renewed
+-- (the change alters no value a version sees: solved conflicts stay solved);
+-- what the chunks cannot hold (a vector property, a reserved name, no
+-- property left) is refused by name (TG100), nothing changed.
 CREATE FUNCTION tgsis.alter_class_table(p_class tgsis.catalog, p_table text, p_alters text[],
                                         p_properties jsonb DEFAULT '[]', p_what text DEFAULT NULL)
 RETURNS void
@@ -40,14 +41,17 @@ DECLARE
     v_class_grants aclitem[];
     v_acl     record;
     v_chunked boolean;
+    v_marks   jsonb;
 BEGIN
     -- a property table stored in chunks (tgsis.store_class_in_chunks): its columns are the chunk table's arrays and
-    -- the face's; it is altered as rows, between a switch back to rows and one to chunks again (both verified)
+    -- the face's; it is altered in place (tgsis.alter_chunk_table)
     v_chunked := to_regclass(format('%I.%I', v_schema, p_table || '_shape')) IS NOT NULL
                  AND to_regclass(format('%I.%I', v_schema, p_table || '_chunk')) IS NOT NULL
                  AND (SELECT c.relkind FROM pg_class c WHERE c.oid = to_regclass(format('%I.%I', v_schema, p_table))) = 'v';
-    IF v_chunked THEN
-        PERFORM tgsis.store_class_in_rows(p_class.classname);
+    IF v_chunked AND EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = v_schema AND t.tablename = p_table) THEN
+        -- the conflicts' marks fingerprint the stored chunk versions, which a new or dropped array changes without
+        -- changing a value any version sees of the other properties: read before, renewed after
+        v_marks := tgsis.conflict_marks();
     END IF;
     -- the class view is made again by tgsis.create_class_view; the rights granted on it since are kept
     SELECT c.relacl INTO v_class_grants FROM pg_class c
@@ -55,7 +59,9 @@ BEGIN
     BEGIN
         EXECUTE format('DROP VIEW IF EXISTS %I.%I', v_schema, p_class.viewname);
         SELECT * INTO v_t FROM tgsis.versioned_tables t WHERE t.schemaname = v_schema AND t.tablename = p_table;
-        IF NOT FOUND THEN
+        IF v_chunked THEN
+            PERFORM tgsis.alter_chunk_table(format('%I.%I', v_schema, p_table), p_alters, p_properties, p_what);
+        ELSIF NOT FOUND THEN
             FOREACH v_alter IN ARRAY p_alters LOOP
                 EXECUTE format('ALTER TABLE %I.%I %s', v_schema, p_table, v_alter);
             END LOOP;
@@ -79,8 +85,8 @@ BEGIN
             USING ERRCODE = 'TG202', DETAIL = v_detail,
                   HINT = 'drop the views that read the class''s tables, change the class, then create them again';
     END;
-    IF v_chunked THEN
-        PERFORM tgsis.store_class_in_chunks(p_class.classname);
+    IF v_marks IS NOT NULL THEN
+        PERFORM tgsis.renew_conflict_marks(v_marks);
     END IF;
     PERFORM tgsis.create_class_view(p_class.classname);
     FOR v_acl IN
@@ -100,4 +106,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.alter_class_table(tgsis.catalog, text, text[], jsonb, text) IS
-    'run ALTER TABLE <each of p_alters> on a feature-class table (in place when plain, on <table>_ver when versioned: every version''s rows; stored as rows first and in chunks again when its properties are in chunks), re-create its versioned view and generated trigger function over the new columns, and the class view (and PostGIS view); TG202 when views of others depend on it';
+    'run ALTER TABLE <each of p_alters> on a feature-class table (in place when plain, on <table>_ver when versioned: every version''s rows; in place on its chunk table, every chunk version, when its properties are in chunks: tgsis.alter_chunk_table), re-create its versioned view and generated trigger function over the new columns, and the class view (and PostGIS view); TG202 when views of others depend on it';

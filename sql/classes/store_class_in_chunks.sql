@@ -16,9 +16,9 @@
 -- marks renewed (solved conflicts stay solved), as tgsis.store_in_chunks does
 -- for a model table. tgsis.enable_feature_versioning versions a class whose
 -- properties are in chunks (tgsis.version_class_tables). add_property,
--- rename_property and drop_property convert the table back to rows and to
--- chunks again around the change (tgsis.alter_class_table; a versioned class
--- too, with its history);
+-- rename_property and drop_property alter the chunk table in place, every
+-- chunk version, versioned or not (tgsis.alter_class_table,
+-- tgsis.alter_chunk_table);
 -- drop_feature_class drops the chunk table with the class. The Python upload
 -- and download of an unversioned class move whole chunks
 -- (tgsis.write_property_chunks, src/tgsis/db/_property_chunks.py).

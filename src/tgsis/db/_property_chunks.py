@@ -25,6 +25,7 @@ otherwise the callers go through the face as before. Private to ``tgsis.db``.
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -215,5 +216,10 @@ def upload_properties(
 
 
 def _staged_name(layout: PropertyChunks) -> sql.Composed:
-    """The session's temporary table of an upload into ``layout``'s chunk table (one per chunk table and its columns)."""
-    return sql.SQL("pg_temp.{}").format(sql.Identifier(f"tgsis_upload_{layout.oid}"))
+    """The session's temporary table of an upload into ``layout``'s chunk table (one per chunk table and its columns).
+
+    The columns are in the name: a property added, renamed or dropped in place (``tgsis.alter_chunk_table``)
+    keeps the chunk table's oid, and an upload after it in the same transaction needs a table of the new columns.
+    """
+    digest = hashlib.sha256(repr(layout.columns.properties).encode()).hexdigest()[:16]
+    return sql.SQL("pg_temp.{}").format(sql.Identifier(f"tgsis_upload_{layout.oid}_{digest}"))
