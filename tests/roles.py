@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 import uuid
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -48,9 +49,28 @@ def login_roles(dsn: str, groups: dict[str, str]) -> Iterator[Roles]:
         finally:
             for connection in roles.opened:
                 connection.close()
+            _wait_for_backends_to_end(admin, [roles.name(short) for short in groups])
             for short in groups:
                 admin.execute(f"DROP OWNED BY {roles.name(short)} CASCADE")
                 admin.execute(f"DROP ROLE {roles.name(short)}")
+
+
+def _wait_for_backends_to_end(admin: Conn, names: list[str], seconds: float = 10.0) -> None:
+    """Wait (a bounded time) until no session of the roles ``names`` is left in the cluster.
+
+    A closed connection's backend drops its temporary tables as it exits,
+    after the client has gone: a session that checked in on chunks has a
+    stage table on which its role holds INSERT (``tgsis.object_chunks_stage``),
+    and ``DROP OWNED BY`` the role then races that drop ("tuple concurrently
+    deleted"). A backend leaves ``pg_stat_activity`` after its temporary
+    tables are dropped.
+    """
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline:
+        row = admin.execute("SELECT count(*) FROM pg_stat_activity WHERE usename = ANY (%s)", (names,)).fetchone()
+        if row is None or row[0] == 0:
+            return
+        time.sleep(0.02)
 
 
 def merges_as(conn: Conn, session: Conn, version: str, *, message: bool = False) -> tuple[tuple[Any, ...], ...]:

@@ -234,7 +234,8 @@ def test_fetching_many_members_takes_one_query_for_all_tables(conn: Conn, monkey
     assert len(queries) == 1 and len(queries[0]) == 4, queries
     # the vertices' rows, or (stored in chunks) their chunks: never the face
     chunked = conn.execute("SELECT tgsis.stored_in_chunks('vrtx')").fetchone() == (True,)
-    assert sum(q == ('tgsis."vrtx_chunk"' if chunked else 'tgsis."vrtx"') for q in queries[0]) == 1, queries
+    vertices = "tgsis.vrtx_chunk" if chunked else "tgsis.vrtx"
+    assert sum(q.replace('"', "") == vertices for q in queries[0]) == 1, queries
     assert sum("rocks_cellpros" in q for q in queries[0]) == 1
 
 
