@@ -205,6 +205,15 @@ def test_roles_and_a_tampered_stage(conn: Conn, db_dsn: str) -> None:
         ed = made.connect("ed")
         assert _chunk_write.swap_object_rows(ed, "vrtx", a, [3], [4, 2000], floats=np.ones((2, 3))) == 2
         ed.commit()
+        # the stage and the grant on it end with the transaction: nothing of it keeps DROP ROLE from the role
+        assert ed.execute("SELECT to_regclass('pg_temp.tgsis_object_chunks_vrtx')").fetchone() == (None,)
+        ed.commit()
+        held = conn.execute(
+            "SELECT count(*) FROM pg_shdepend d JOIN pg_roles r ON r.oid = d.refobjid WHERE r.rolname = %s",
+            (made.name("ed"),),
+        ).fetchone()
+        conn.commit()
+        assert held == (0,)
         row = conn.execute("SELECT x, y, z FROM tgsis.vrtx WHERE geoid = %s AND vrtxid IN (3, 2000)", (a,)).fetchall()
         assert row == [(1.0, 1.0, 1.0)]  # 3 gone, 2000 written
         conn.commit()

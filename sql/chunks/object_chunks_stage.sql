@@ -1,4 +1,4 @@
--- tgsis.object_chunks_stage(table): the session's temporary table into which a client COPYs the chunks it encoded for tgsis.swap_object_chunks.
+-- tgsis.object_chunks_stage(table): the transaction's temporary table into which a client COPYs the chunks it encoded for tgsis.swap_object_chunks.
 -- A check-in of a scattered edit touches nearly every chunk of the object;
 -- re-aggregating each in SQL (tgsis.write_chunk_rows) costs 3-5 ms a chunk,
 -- so the client encodes the touched chunks itself (tgsis._chunks, as the
@@ -9,8 +9,12 @@
 -- fills (geoid, chunk, revision, holes, [vbase, vtop], the arrays, [_wide]);
 -- each array compressed as the chunk table compresses it (the swap then
 -- copies the values as they are: compressed once, by the client's COPY);
--- INSERT on it is granted to the calling role. Made once per session and
--- table, emptied at each call. Refused by name: a table not stored in chunks
+-- INSERT on it is granted to the calling role. Made once per transaction
+-- and table (ON COMMIT DROP: a grant to the role on a table that outlived the
+-- transaction would keep DROP ROLE from dropping the role while its session
+-- lives, and race the drop of the session's temporary tables after it),
+-- emptied at each call; so the stage, the COPY and the swap are one
+-- transaction. Refused by name: a table not stored in chunks
 -- (TG100); a temporary table of that name the session made itself (42501).
 -- Returns the table's name, schema-qualified (pg_temp).
 CREATE FUNCTION tgsis.object_chunks_stage(p_table text)
@@ -41,7 +45,7 @@ BEGIN
                                             WHERE c.role IN ('float', 'ref') ORDER BY c.colorder)
                                   || ARRAY(SELECT quote_ident(c.name || '_wide') FROM tgsis.chunk_columns(p_table) c
                                             WHERE c.role = 'ref' ORDER BY c.colorder), ', ');
-        EXECUTE format('CREATE TEMP TABLE %s AS SELECT %s FROM %s WITH NO DATA', v_stage, v_cols, tgsis.chunk_table_of(p_table));
+        EXECUTE format('CREATE TEMP TABLE %s ON COMMIT DROP AS SELECT %s FROM %s WITH NO DATA', v_stage, v_cols, tgsis.chunk_table_of(p_table));
         -- each array compressed as the chunk table compresses it: the swap then copies the compressed values as they are
         FOR v_col IN SELECT a.attname, a.attcompression FROM pg_attribute a
                       WHERE a.attrelid = tgsis.chunk_table_of(p_table) AND a.attnum > 0 AND NOT a.attisdropped
@@ -64,4 +68,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.object_chunks_stage(text) IS
-    'the session''s temporary table (owned by tgsis''s owner, INSERT granted to the calling role, emptied) into which a client COPYs the chunk versions it encoded for tgsis.swap_object_chunks; returns its name';
+    'the transaction''s temporary table (owned by tgsis''s owner, INSERT granted to the calling role, emptied, dropped at commit) into which a client COPYs the chunk versions it encoded for tgsis.swap_object_chunks; returns its name';
