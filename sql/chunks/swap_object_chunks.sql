@@ -5,7 +5,7 @@
 -- object. Here the client read the visible versions of the touched chunks
 -- (p_chunks) with their places (p_bases: tableoid:ctid:xmin, NULL where no
 -- version was visible), merged its edit into them and encoded the result
--- itself (tgsis._chunks, as the upload does), COPied into the session's stage
+-- itself (tgsis._chunks, as the upload does), COPied into the transaction's stage
 -- (tgsis.object_chunks_stage); a touched chunk absent from the stage is left
 -- without a row. After the checks of tgsis.write_object_rows, for a write that
 -- may change stored rows (INSERT and DELETE on the face tgsis.<table>: 42501;

@@ -144,7 +144,7 @@ def swap_object_rows(
     touches nearly all). In the caller's transaction: the visible versions
     of the touched chunks read with their places in one binary COPY, the
     edit merged into their rows, the chunks encoded (:func:`tgsis._chunks.encode`,
-    as the upload does) and COPied into the session's stage
+    as the upload does) and COPied into the transaction's stage
     (``tgsis.object_chunks_stage``), then ``tgsis.swap_object_chunks`` checks
     the rights, locks, verifies the encoding and that every chunk's visible
     version is still the one read (TG300, nothing written, when another
