@@ -57,10 +57,14 @@ def build(conn: Conn) -> Ids:
         ("tops", "STATIC", surface),
         ("steps", "INSTANTS", series(rng, [0.0, 1.0, 2.0])),
         ("moving", "EVOLVING", evolving(rng, [0.0, 2.0])),
-        ("maps", "GMAP", square),
+        (
+            "maps",
+            "GMAP",
+            gmaps.EvolvingGMap([gmaps.GMapPeriod([0.0, 1.0], square, [square.points, square.points * 2])]),
+        ),
         ("md", "MULTIDIM", lifted),
     ]:
-        geotype = "GMAP" if isinstance(obj, gmaps.GMap) else "SURFACE"
+        geotype = "GMAP" if isinstance(obj, gmaps.GMap | gmaps.EvolvingGMap) else "SURFACE"
         fc = tgsis.create_feature_class(
             conn,
             name,
@@ -188,6 +192,11 @@ READERS: dict[str, tuple[Callable[[Conn, Ids], Any], Callable[[Any], Any], str]]
         lambda g: (g.name, [_xsum(p.positions) for p in g.periods]),
         NAME_AND_X + "UPDATE tgsis.gmap_vertex SET coordinate[1] = coordinate[1] + 1 WHERE geoid = {id}",
     ),
+    "gmap_at": (
+        lambda c, i: tgsis.gmap_at(c, i.gmap, 0.5),
+        lambda g: _xsum(g.points),
+        "UPDATE tgsis.gmap_vertex SET coordinate[1] = coordinate[1] + 1 WHERE geoid = {id}",
+    ),
     "fetch_md_gmap": (
         lambda c, i: tgsis.fetch_md_gmap(c, "md", i.md),
         lambda r: (r[1], _xsum(r[0].points)),
@@ -206,12 +215,15 @@ FEATURE = {
     "checkout": "static",
     "fetch_evolving": "evolving",
     "fetch_gmap": "gmap",
+    "gmap_at": "gmap",
     "fetch_md_gmap": "md",
 }
 # the reader's statement after which the other session commits: the first that reads the name (or axes)
 MARKERS = ("geoname", "m.axes")
 # but the check-out's look-up of the feature before its read (in a transaction of its own)
 SKIP = {"checkout": 1}
+# gmap_at reads no name: after its COPY of the positions at the instant before t (then those after t)
+MARKERS_OF = {"gmap_at": ("FROM tgsis.gmap_vertex",)}
 
 
 def _change(other: Conn, reader: str, ids: Ids) -> Callable[[], None]:
@@ -245,7 +257,7 @@ def test_a_commit_between_the_statements_of_a_read_in_a_read_committed_transacti
     _, before = _states(conn, other, reader, ids)  # the state committed now; the hook's commit changes it again
     conn.execute("SELECT 1")  # the caller's READ COMMITTED transaction is open (psycopg's default)
     assert conn.info.transaction_status == psycopg.pq.TransactionStatus.INTRANS
-    hook = interleave(conn, _change(other, reader, ids), MARKERS, skip=SKIP.get(reader, 0))
+    hook = interleave(conn, _change(other, reader, ids), MARKERS_OF.get(reader, MARKERS), skip=SKIP.get(reader, 0))
     got = state(read(conn, ids))
     assert hook.fired == 1
     conn.rollback()
@@ -355,3 +367,23 @@ def test_the_callers_own_uncommitted_write_is_seen(conn: Conn, ids: Ids) -> None
     assert (
         got.surfaces[0].vertices[0, 0] == tgsis.fetch_series(conn, "steps", ids.series).surfaces[0].vertices[0, 0] + 10
     )
+
+
+def test_a_role_with_fewer_rights_reads_one_state_in_its_read_committed_transaction(
+    db_dsn: str, conn: Conn, other: Conn, ids: Ids, interleave: Callable[..., Interleave]
+) -> None:
+    """The snapshot's functions (pg_current_snapshot, pg_last_wal_replay_lsn) need no right a reader lacks."""
+    from tests.roles import login_roles
+
+    _, before = _states(conn, other, "fetch_features", ids)
+    with login_roles(db_dsn, {"ann": "tgsis_reader"}) as roles:
+        reader = roles.connect("ann")
+        read, state, _ = READERS["fetch_features"]
+        reader.execute("SELECT 1")
+        hook = interleave(reader, _change(other, "fetch_features", ids), MARKERS)
+        got = state(read(reader, ids))
+        assert hook.fired == 1
+        reader.rollback()
+        after = state(read(reader, ids))
+        assert before != after and got in (before, after)
+        reader.rollback()

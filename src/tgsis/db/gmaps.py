@@ -465,7 +465,9 @@ def gmap_at(conn: Conn, feature_id: int, t: float) -> GMap | None:
     """
     t = check_time(t)
     fc = gmap_class(conn, class_of_feature(conn, feature_id))
-    with reraise(), conn.transaction():
+
+    def read() -> tuple[Any, ...] | None:
+        """The period's rows at t, of one state (:func:`consistent_read`)."""
         n_row = conn.execute("SELECT dimension, embedding FROM tgsis.gmap WHERE geoid = %s", (feature_id,)).fetchone()
         frame = conn.execute("SELECT timem, t0, t1, w FROM tgsis.gmap_frame(%s, %s)", (feature_id, t)).fetchone()
         if n_row is None or frame is None:
@@ -526,6 +528,13 @@ def gmap_at(conn: Conn, feature_id: int, t: float) -> GMap | None:
             if props and fc.cell_level is not None
             else []
         )
+        return n, m, t0, t1, w, dart, alpha, ends, props, values
+
+    with reraise():
+        found = consistent_read(conn, "gmap_at", read)
+    if found is None:
+        return None
+    n, m, t0, t1, w, dart, alpha, ends, props, values = found
     same = t0 == t1
     if not np.array_equal(ends[0][0], ends[1][0]):
         raise InvalidGMapError(
