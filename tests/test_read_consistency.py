@@ -387,3 +387,50 @@ def test_a_role_with_fewer_rights_reads_one_state_in_its_read_committed_transact
         after = state(read(reader, ids))
         assert before != after and got in (before, after)
         reader.rollback()
+
+
+def test_an_error_of_a_try_that_others_interleaved_is_read_again_an_error_of_one_state_is_raised(
+    conn: Conn, other: Conn, ids: Ids
+) -> None:
+    """Statements of two states may raise what neither state would (a triangle naming a vertex not read yet)."""
+    calls: list[int] = []
+
+    def read() -> int:
+        calls.append(len(calls))
+        conn.execute("SELECT count(*) FROM tgsis.geometry").fetchone()
+        if len(calls) == 1:
+            other.execute("UPDATE tgsis.geometry SET geoname = 'x' WHERE geoid = %s", (ids.static,))
+            raise tgsis.InvalidGeometryError("what two states gave")
+        return len(calls)
+
+    conn.execute("SELECT 1")
+    assert _transfer.consistent_read(conn, "a test", read) == 2
+    calls.clear()
+
+    def failing() -> int:
+        calls.append(len(calls))
+        conn.execute("SELECT 1/0").fetchone()  # an error of the state itself: in the savepoint, rolled back
+        return 0
+
+    with pytest.raises(psycopg.errors.DivisionByZero):
+        _transfer.consistent_read(conn, "a test", failing)
+    assert calls == [0]
+    assert conn.info.transaction_status == psycopg.pq.TransactionStatus.INTRANS  # the caller's, usable
+    assert conn.execute("SELECT 2").fetchone() == (2,)
+
+
+def test_a_consistent_read_inside_another_on_the_same_connection_runs_plainly(conn: Conn) -> None:
+    marks: list[str] = []
+    execute = psycopg.Cursor.execute
+
+    def counting(self: psycopg.Cursor[Any], query: Any, *args: Any, **kwargs: Any) -> Any:
+        if "pg_current_snapshot" in _text(self, query):
+            marks.append("mark")
+        return execute(self, query, *args, **kwargs)
+
+    conn.execute("SELECT 1")
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(psycopg.Cursor, "execute", counting)
+        inner = _transfer.consistent_read(conn, "outer", lambda: _transfer.consistent_read(conn, "inner", lambda: 7))
+    assert inner == 7
+    assert marks == ["mark", "mark"]  # the outer's before and after, none of the inner's
