@@ -21,6 +21,7 @@ INSERT INTO tgsis.error_codes (sqlstate, name, area, description) VALUES
     ('TG000', 'tgsis',            'core',    'a tgsis error that fits no narrower code'),
     ('TG001', 'installation',     'core',    'the tgsis objects in the database cannot be installed, upgraded or used at this version'),
     ('TG002', 'missing_privilege','core',    'the current role lacks a right tgsis needs (creating roles, owning a version, merging into DEFAULT)'),
+    ('TG003', 'concurrent_read',  'core',    'a read of several statements in a READ COMMITTED transaction met other sessions'' commits between its statements at every try: its statements would have seen different states'),
     ('TG100', 'invalid_input',    'input',   'an argument is out of range, NULL where a value is required, or otherwise malformed'),
     ('TG101', 'invalid_name',     'input',   'a name (feature class, property, version, table) is empty, too long, or would need quoting where that is not allowed'),
     ('TG102', 'invalid_geometry', 'input',   'coordinates are NaN or infinite, or a simplex has out-of-range or repeated vertex indices'),

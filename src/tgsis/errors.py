@@ -26,6 +26,7 @@ __all__ = [
     "Error",
     "InstallationError",
     "MissingPrivilegeError",
+    "ConcurrentReadError",
     "InvalidInputError",
     "InvalidNameError",
     "InvalidGeometryError",
@@ -106,6 +107,18 @@ class MissingPrivilegeError(Error):
     """The current role lacks a right tgsis needs."""
 
     code = "TG002"
+
+
+class ConcurrentReadError(Error):
+    """A read of several statements in a ``READ COMMITTED`` transaction met other sessions' commits at every try.
+
+    Its statements would have seen different states (each takes a new
+    snapshot under ``READ COMMITTED``); nothing was returned, and the
+    caller's transaction is as it was. Read outside a transaction, or in a
+    ``REPEATABLE READ`` one.
+    """
+
+    code = "TG003"
 
 
 class InvalidInputError(Error, ValueError):

@@ -17,7 +17,7 @@ holds an object's rows of ``tgsis.<t>`` in blocks of 1,024 ids
   (today's versioned views' test, ``tgsis.get_revisions(true)``; every chunk
   of unversioned storage) of one or many objects with one
   ``COPY (SELECT ...) TO STDOUT (FORMAT binary)`` per table, inside one
-  snapshot for several tables (:func:`~tgsis.db._transfer.one_snapshot`),
+  state for several tables (:func:`~tgsis.db._transfer.consistent_read`),
   and parses them into ids and arrays per object.
 
 Rights are the role's own: the COPY runs as it, so the chunk table's grants
@@ -40,7 +40,7 @@ import psycopg
 from psycopg import sql
 
 from tgsis._chunks import CHUNK_SIZE, COPY_SIGNATURE, ChunkColumns, ChunkSet, encode, from_copy, to_copy
-from tgsis.db._transfer import Packed, PartRequest, Storage, one_snapshot, read_only_snapshot, staged
+from tgsis.db._transfer import Packed, PartRequest, Storage, consistent_read, read_only_snapshot, staged
 from tgsis.errors import AlreadyExistsError, DatabaseError, InvalidInputError, NotFoundError
 
 __all__ = [
@@ -429,11 +429,11 @@ def download_chunks(conn: Conn, table: str, geoids: Sequence[int]) -> dict[int, 
 def download_tables(
     conn: Conn, requests: Mapping[str, Sequence[int]], side: Conn | None = None
 ) -> dict[str, dict[int, ObjectRows]]:
-    """:func:`download_chunks` of several tables, one COPY each, all in one snapshot (:func:`one_snapshot`).
+    """:func:`download_chunks` of several tables, one COPY each, all of one state (:func:`consistent_read`).
 
     Outside a transaction the COPYs run in one read-only repeatable-read transaction: a writer that
-    commits between them is seen by none or all of them. Inside the caller's, they see what its isolation
-    level gives.
+    commits between them is seen by none or all of them. Inside the caller's ``READ COMMITTED``
+    one, they are read again when another session committed between them (our ``TG003`` after a few tries).
 
     Parameters
     ----------
@@ -455,32 +455,39 @@ def download_tables(
     wanted = {table: list(dict.fromkeys(int(g) for g in geoids)) for table, geoids in requests.items()}
     idle = psycopg.pq.TransactionStatus.IDLE
     parallel = side is not None and len(wanted) > 1 and conn.info.transaction_status == idle
-    result: dict[str, dict[int, ObjectRows]] = {}
-    with one_snapshot(conn), concurrent.futures.ThreadPoolExecutor(1) as pool:
-        layouts = {table: chunk_table(conn, table) for table in wanted}
-        pending = None
-        if parallel and side is not None:
-            row = conn.execute(
-                "SELECT pg_export_snapshot(), current_user::text, tgsis.get_revisions(true), current_database()::text"
-            ).fetchone()
-            assert row is not None
-            snapshot, role, revisions, database = row
-            if side.info.dbname != database:
-                raise InvalidInputError(
-                    f"the second connection of a download is to database {side.info.dbname!r}, not {database!r}",
-                    detail="a snapshot is shared within one database only",
+
+    def read() -> dict[str, dict[int, ObjectRows]]:
+        """Every table's COPY, of one state (:func:`~tgsis.db._transfer.consistent_read`)."""
+        result: dict[str, dict[int, ObjectRows]] = {}
+        asked = dict(wanted)
+        with concurrent.futures.ThreadPoolExecutor(1) as pool:
+            layouts = {table: chunk_table(conn, table) for table in asked}
+            pending = None
+            if parallel and side is not None:
+                row = conn.execute(
+                    "SELECT pg_export_snapshot(), current_user::text, tgsis.get_revisions(true), current_database()::text"
+                ).fetchone()
+                assert row is not None
+                snapshot, role, revisions, database = row
+                if side.info.dbname != database:
+                    raise InvalidInputError(
+                        f"the second connection of a download is to database {side.info.dbname!r}, not {database!r}",
+                        detail="a snapshot is shared within one database only",
+                    )
+                last = list(asked)[-1]
+                pending = pool.submit(_side_copy, side, snapshot, role, layouts[last], asked[last], revisions)
+                asked = {table: geoids for table, geoids in asked.items() if table != last}
+            for table, geoids in asked.items():
+                layout = layouts[table]
+                result[table] = (
+                    _objects(layout, geoids, _copy_out(conn, chunk_copy_query(layout, geoids))) if geoids else {}
                 )
-            last = list(wanted)[-1]
-            pending = pool.submit(_side_copy, side, snapshot, role, layouts[last], wanted[last], revisions)
-            wanted = {table: geoids for table, geoids in wanted.items() if table != last}
-        for table, geoids in wanted.items():
-            layout = layouts[table]
-            result[table] = (
-                _objects(layout, geoids, _copy_out(conn, chunk_copy_query(layout, geoids))) if geoids else {}
-            )
-        if pending is not None:
-            table, payload, geoids = pending.result()
-            result[table] = _objects(layouts[table], geoids, payload) if geoids else {}
+            if pending is not None:
+                table, payload, geoids = pending.result()
+                result[table] = _objects(layouts[table], geoids, payload) if geoids else {}
+        return result
+
+    result = consistent_read(conn, "download_tables", read)
     return {table: result[table] for table in requests}
 
 

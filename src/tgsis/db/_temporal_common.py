@@ -23,10 +23,10 @@ from tgsis._series import check_time
 from tgsis.arguments import checked, no_nul
 from tgsis.db._transfer import (
     SEND_FUNCTIONS,
+    consistent_read,
     copy_out,
     local_positions,
     packed_out,
-    read_only_snapshot,
     resolve_class,
     rows_by_geoid,
 )
@@ -307,7 +307,9 @@ def get_at(
         NaN time or an unknown convention.
     """
     t_lit, c_lit = time_args(t, convention)
-    with reraise(), read_only_snapshot(conn):  # vertices, triangles and properties of one state
+
+    def read() -> Surface | None:
+        """The surface and its properties of one state (:func:`consistent_read`)."""
         row = conn.execute(
             sql.SQL("SELECT tgsis.exists_at(%s, {}, {}), geoname, geotype FROM tgsis.geometry WHERE geoid = %s").format(
                 t_lit, c_lit
@@ -342,9 +344,12 @@ def get_at(
             )
         order = rows_by_geoid(tid, tid, [feature_id])[feature_id]
         surface = assemble_surface(feature_id, ids, (x, y, z), (a[order], b[order], c[order]), row[1])
-        if properties:
+        if properties:  # read in the same state (they were read after it, in a snapshot of their own)
             _properties_at(conn, surface, feature_id, t, convention, np.sort(ids), tid[order])
-    return surface
+        return surface
+
+    with reraise():
+        return consistent_read(conn, "get_at", read)
 
 
 @checked

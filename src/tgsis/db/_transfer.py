@@ -12,12 +12,13 @@ from __future__ import annotations
 
 import concurrent.futures
 import contextlib
+import contextvars
 import itertools
 import json
 import logging
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any, Protocol
+from typing import Any, Protocol, TypeVar
 
 import numpy as np
 import numpy.typing as npt
@@ -26,7 +27,14 @@ from psycopg import sql
 
 from tgsis.db.classes import FeatureClass, get_feature_class, stores_part_column
 from tgsis.db.copy import SQL_TYPES, decode_packed, decode_rows, encode_chunks, encode_rows, numpy_dtype, wire_shape
-from tgsis.errors import DatabaseError, InUseError, InvalidGeometryError, InvalidPropertyError, NotVersionedError
+from tgsis.errors import (
+    ConcurrentReadError,
+    DatabaseError,
+    InUseError,
+    InvalidGeometryError,
+    InvalidPropertyError,
+    NotVersionedError,
+)
 from tgsis.mesh import Mesh
 
 log = logging.getLogger("tgsis.db.features")
@@ -46,14 +54,124 @@ def class_name(feature_class: str | FeatureClass) -> str:
 
 @contextlib.contextmanager
 def read_only_snapshot(conn: Conn) -> Iterator[None]:
-    """A transaction in which every statement sees the same state of the database.
+    """A transaction for one statement's read, or for reads whose mixing the caller accepts.
 
     Outside a transaction, a new one that is ``REPEATABLE READ READ ONLY``;
     inside the caller's transaction, a savepoint of it (its isolation level is
-    the caller's to choose, and it may write).
+    the caller's to choose, and it may write). Under ``READ COMMITTED`` each
+    statement sees its own snapshot: a read of several statements that must
+    see one state goes through :func:`consistent_read`.
     """
     with repeatable_read(conn, write=False):
         yield
+
+
+_T = TypeVar("_T")
+
+#: how many times :func:`consistent_read` runs a read that other sessions' commits interleaved, before it gives up
+CONSISTENT_READ_TRIES = 5
+
+# the connections (by id) inside a consistent_read of this thread: a nested one runs its read plainly
+_reading: contextvars.ContextVar[frozenset[int]] = contextvars.ContextVar("tgsis_consistent_read", default=frozenset())
+
+
+def consistent_read(conn: Conn, what: str, read: Callable[[], _T], *, tries: int = CONSISTENT_READ_TRIES) -> _T:
+    """``read()``, a read of several statements, with every statement seeing one state of the database.
+
+    - Outside a transaction: in a new ``REPEATABLE READ READ ONLY`` one
+      (:func:`read_only_snapshot`).
+    - In the caller's ``REPEATABLE READ`` or ``SERIALIZABLE`` transaction: in
+      a savepoint of it (the transaction's one snapshot).
+    - In the caller's ``READ COMMITTED`` transaction (psycopg's default: a
+      connection that is not autocommit opens one at its first statement),
+      where each statement takes a new snapshot: in a savepoint, between two
+      statements reading the snapshot (``pg_current_snapshot()``: xmin, xmax
+      and the transactions running) and, on a hot standby, the WAL replayed
+      (``pg_last_wal_replay_lsn()``). Equal, no other transaction completed
+      in between (xmax is the last completed transaction's id + 1, so a
+      commit of one that is not listed changes xmax, and of one that is
+      listed changes the list), so every statement of the read saw the same
+      committed state; else the savepoint is rolled back and ``read`` runs
+      again, up to ``tries`` times in all. An error ``read`` raises is raised
+      when the state did not change during the try (else the try is run
+      again: the error may come from states mixed). The caller's own
+      uncommitted writes are seen (one transaction); a commit of another
+      session that changes nothing read costs a try all the same.
+
+    A ``consistent_read`` inside another's ``read`` on the same connection runs
+    its ``read`` plainly: the outer one checks (and retries) the whole.
+
+    Parameters
+    ----------
+    what : str
+        The read, as its error names it (e.g. ``"fetch_features"``).
+    read : callable
+        The statements, run on ``conn``; may run more than once, so it should have
+        no effect outside the database (its writes, if any, are rolled back with the savepoint).
+    tries : int
+
+    Raises
+    ------
+    ConcurrentReadError
+        In a ``READ COMMITTED`` transaction, other sessions committed during each of the ``tries``;
+        the caller's transaction is left as it was.
+    """
+    if id(conn) in _reading.get():
+        return read()
+    token = _reading.set(_reading.get() | {id(conn)})
+    try:
+        return _consistent_read(conn, what, read, tries)
+    finally:
+        _reading.reset(token)
+
+
+_SNAPSHOT_MARK = (
+    "SELECT current_setting('transaction_isolation'), pg_catalog.pg_current_snapshot()::text, "
+    "pg_catalog.pg_last_wal_replay_lsn()::text"
+)
+
+
+def _snapshot_mark(conn: Conn) -> tuple[str, str, str | None]:
+    """The isolation level, the statement's snapshot and the WAL replayed (a standby's), read in one statement."""
+    row = conn.execute(_SNAPSHOT_MARK).fetchone()
+    assert row is not None
+    return str(row[0]), str(row[1]), row[2]
+
+
+def _consistent_read(conn: Conn, what: str, read: Callable[[], _T], tries: int) -> _T:
+    """:func:`consistent_read` of a connection not inside one already."""
+    if conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE:
+        with read_only_snapshot(conn):
+            return read()
+    before = _snapshot_mark(conn)
+    if before[0] in ("repeatable read", "serializable"):
+        with conn.transaction():
+            return read()
+    failure: Exception | None = None
+    for attempt in range(1, tries + 1):
+        failure = None
+        try:
+            with conn.transaction() as savepoint:
+                result = read()
+                if _snapshot_mark(conn)[1:] == before[1:]:
+                    return result
+                raise psycopg.Rollback(savepoint)  # states mixed: nothing of the try is kept
+        except Exception as exc:  # noqa: BLE001 (raised below when the state did not change)
+            failure = exc
+        if failure is not None and conn.broken:
+            raise failure  # no connection left to read on
+        after = _snapshot_mark(conn)  # the savepoint is rolled back: the transaction reads on
+        if failure is not None and after[1:] == before[1:]:
+            raise failure  # an error of one state: the read's own
+        log.debug("%s: other sessions committed during try %d of the read, read again", what, attempt)
+        before = after
+    raise ConcurrentReadError(
+        f"{what} read several tables in a READ COMMITTED transaction while other sessions committed: "
+        f"{tries} tries saw changes between its statements",
+        detail="under READ COMMITTED each statement sees what others committed before it: "
+        "the read would have mixed states",
+        hint="read outside a transaction, or in a REPEATABLE READ transaction",
+    ) from failure
 
 
 @contextlib.contextmanager

@@ -68,9 +68,9 @@ from tgsis.db._transfer import (
     Storage,
     aligned_properties,
     check_feature_values,
+    consistent_read,
     feature_columns,
     local_positions,
-    read_only_snapshot,
     resolve_class,
 )
 from tgsis.db.classes import FeatureClass, class_of_feature, stores_part_column
@@ -982,20 +982,26 @@ def checkout(conn: Conn, feature_id: int, feature_class: str | FeatureClass | No
                     f"{exc.message} in version {show_name(_working_state(conn)[0])}", detail=exc.detail, hint=exc.hint
                 ) from exc
             frozen = _freeze(conn)
-        with read_only_snapshot(conn):  # one snapshot for the fingerprint and the rows
-            settings = read_version_settings(conn)
-            version, revision = _working_state(conn)
-            if frozen is not None:  # a frozen revision's state never changes: no lock is needed to read it
-                conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, frozen))
-                revision = frozen
-            name, _, properties = _feature_row(conn, fc, feature_id)
-            row = conn.execute("SELECT tgsis.object_fingerprint(%s), current_database()", (feature_id,)).fetchone()
-            assert row is not None
-            base = _stored_mesh(conn, fc, feature_id, name)
-            meaning = conn.execute(
-                f"SELECT {MEANING_COLUMNS} FROM tgsis.geometry g WHERE g.geoid = %s", (feature_id,)
-            ).fetchone()
-            restore_version_settings(conn, settings, local=True)  # for the rest of an enclosing transaction
+
+    def read() -> tuple[Any, ...]:
+        """The fingerprint and the rows, of one state (:func:`consistent_read`)."""
+        settings = read_version_settings(conn)
+        version, revision = _working_state(conn)
+        if frozen is not None:  # a frozen revision's state never changes: no lock is needed to read it
+            conn.execute("SELECT tgsis.goto_revision(%s, %s, true)", (version, frozen))
+            revision = frozen
+        name, _, properties = _feature_row(conn, fc, feature_id)
+        row = conn.execute("SELECT tgsis.object_fingerprint(%s), current_database()", (feature_id,)).fetchone()
+        assert row is not None
+        base = _stored_mesh(conn, fc, feature_id, name)
+        meaning = conn.execute(
+            f"SELECT {MEANING_COLUMNS} FROM tgsis.geometry g WHERE g.geoid = %s", (feature_id,)
+        ).fetchone()
+        restore_version_settings(conn, settings, local=True)  # for the rest of an enclosing transaction
+        return version, revision, name, properties, row, base, meaning
+
+    with reraise():
+        version, revision, name, properties, row, base, meaning = consistent_read(conn, "checkout", read)
     token = CheckoutToken(
         feature_id,
         fc.name,

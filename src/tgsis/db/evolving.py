@@ -47,9 +47,9 @@ from tgsis.db._transfer import (
     Storage,
     class_property_arrays,
     concat,
+    consistent_read,
     insert_feature_row,
     local_positions,
-    read_only_snapshot,
 )
 from tgsis.db.classes import FeatureClass
 from tgsis.db.copy import SQL_TYPES
@@ -416,7 +416,9 @@ def fetch_evolving(conn: Conn, feature_class: str | FeatureClass, feature_id: in
     """
     fc = temporal_class(conn, feature_class, "EVOLVING")
     names, types = cell_columns(fc)
-    with reraise(), read_only_snapshot(conn):  # every table's rows of one state
+
+    def read() -> tuple[Any, ...]:
+        """Every table's rows of the feature, of one state (:func:`consistent_read`)."""
         row = conn.execute(
             "SELECT geoname, alive, colorred, colorgreen, colorblue FROM tgsis.geometry "
             "WHERE geoid = %s AND timemodel = 'EVOLVING'",
@@ -455,6 +457,10 @@ def fetch_evolving(conn: Conn, feature_class: str | FeatureClass, feature_id: in
             else []
         )
         values = instant_values(conn, fc, feature_id, ["_timem", "_timet"])
+        return row, tm, tt, cm, a, b, c, vm, vt, nid, x, y, z, props, values
+
+    with reraise():
+        row, tm, tt, cm, a, b, c, vm, vt, nid, x, y, z, props, values = consistent_read(conn, "fetch_evolving", read)
     periods = []
     for start in np.unique(tm).tolist():
         times = tt[tm == start]

@@ -33,6 +33,7 @@ from tgsis.arguments import checked, checked_ids
 from tgsis.datamodels import StoredObject
 from tgsis.db._static import (
     MEANING_COLUMNS,
+    Download,
     Part,
     assemble_meshes,
     collection_members,
@@ -50,8 +51,8 @@ from tgsis.db._transfer import (
     aligned_properties,
     check_class_unchanged,
     check_feature_values,
+    consistent_read,
     feature_columns,
-    read_only_snapshot,
     resolve_class,
 )
 from tgsis.db.classes import (
@@ -336,7 +337,9 @@ def fetch_features(conn: Conn, feature_class: str | FeatureClass, ids: Sequence[
         )
     props = [p.name for p in fc.feature_properties]
     is_collection = fc.geotype is Geotype.GEOMETRYCOLLECTION
-    with reraise(), read_only_snapshot(conn):
+
+    def read() -> tuple[dict[int, Any], list[int], dict[int, list[tuple[int, Part]]], dict[int, Part], Download | None]:
+        """The features' rows, members and meshes' rows of one state (:func:`consistent_read`)."""
         rows = conn.execute(
             sql.SQL(
                 "SELECT f._geoid, g.geoname, " + MEANING_COLUMNS + "{} FROM {} f "
@@ -352,8 +355,6 @@ def fetch_features(conn: Conn, feature_class: str | FeatureClass, ids: Sequence[
         missing = [i for i in wanted if i not in found]
         if missing:
             raise NotFoundError(f"feature class {fc.name} has no feature(s) {missing}")
-        if not wanted:
-            return []
         members: dict[int, list[tuple[int, Part]]] = {}
         if is_collection:
             members = collection_members(conn, fc, list(dict.fromkeys(wanted)))
@@ -363,8 +364,12 @@ def fetch_features(conn: Conn, feature_class: str | FeatureClass, ids: Sequence[
                 g: Part(fc.geotype, found[g][1], f"feature {g} of class {fc.name}", **part_meaning(found[g][2:8]))
                 for g in wanted
             }
-        data = download(conn, fc, parts)
+        return found, wanted, members, parts, download(conn, fc, parts) if wanted else None
 
+    with reraise():
+        found, wanted, members, parts, data = consistent_read(conn, "fetch_features", read)
+    if data is None:
+        return []
     meshes = assemble_meshes(fc, parts, data)
     features = []
     used: set[int] = set()

@@ -49,10 +49,10 @@ from tgsis.db._transfer import (
     Columns,
     Storage,
     concat,
+    consistent_read,
     copy_out,
     insert_feature_row,
     local_positions,
-    read_only_snapshot,
     resolve_class,
 )
 from tgsis.db.classes import FeatureClass, class_of_feature
@@ -354,7 +354,9 @@ def fetch_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -
         Stored rows that do not make a G-map (see ``tgsis.gmap_check``).
     """
     fc = gmap_class(conn, feature_class)
-    with reraise(), read_only_snapshot(conn):
+
+    def read() -> tuple[Any, ...]:
+        """The G-map's rows of every table, of one state (:func:`consistent_read`)."""
         head = conn.execute(
             sql.SQL(
                 "SELECT g.geoname, g.alive, m.dimension, m.embedding FROM {} f "
@@ -407,6 +409,10 @@ def fetch_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -
                 ),
                 [0, 1, 2],
             )
+        return name, alive, n, m, times, nodes, vertex, dart, alpha, values
+
+    with reraise():
+        name, alive, n, m, times, nodes, vertex, dart, alpha, values = consistent_read(conn, "fetch_gmap", read)
     aligned = _key_ordered_images(alpha, dart[1], n)
     periods = []
     for start in np.unique(times[0]):
@@ -459,7 +465,9 @@ def gmap_at(conn: Conn, feature_id: int, t: float) -> GMap | None:
     """
     t = check_time(t)
     fc = gmap_class(conn, class_of_feature(conn, feature_id))
-    with reraise(), conn.transaction():
+
+    def read() -> tuple[Any, ...] | None:
+        """The period's rows at t, of one state (:func:`consistent_read`)."""
         n_row = conn.execute("SELECT dimension, embedding FROM tgsis.gmap WHERE geoid = %s", (feature_id,)).fetchone()
         frame = conn.execute("SELECT timem, t0, t1, w FROM tgsis.gmap_frame(%s, %s)", (feature_id, t)).fetchone()
         if n_row is None or frame is None:
@@ -520,6 +528,13 @@ def gmap_at(conn: Conn, feature_id: int, t: float) -> GMap | None:
             if props and fc.cell_level is not None
             else []
         )
+        return n, m, t0, t1, w, dart, alpha, ends, props, values
+
+    with reraise():
+        found = consistent_read(conn, "gmap_at", read)
+    if found is None:
+        return None
+    n, m, t0, t1, w, dart, alpha, ends, props, values = found
     same = t0 == t1
     if not np.array_equal(ends[0][0], ends[1][0]):
         raise InvalidGMapError(

@@ -41,7 +41,7 @@ from tgsis.db._temporal_common import (
     temporal_class,
     tgsis_table,
 )
-from tgsis.db._transfer import Storage, aligned_properties, concat, insert_feature_row, read_only_snapshot, row_keys
+from tgsis.db._transfer import Storage, aligned_properties, concat, consistent_read, insert_feature_row, row_keys
 from tgsis.db.classes import FeatureClass
 from tgsis.db.copy import SQL_TYPES
 from tgsis.drawing import Drawable
@@ -274,7 +274,9 @@ def fetch_series(conn: Conn, feature_class: str | FeatureClass, feature_id: int)
     """
     fc = temporal_class(conn, feature_class, "INSTANTS")
     names, types = cell_columns(fc)
-    with reraise(), read_only_snapshot(conn):  # every table's rows of one state
+
+    def read() -> tuple[Any, ...]:
+        """Every table's rows of the feature, of one state (:func:`consistent_read`)."""
         row = conn.execute(
             "SELECT geoname, alive, colorred, colorgreen, colorblue FROM tgsis.geometry "
             "WHERE geoid = %s AND timemodel = 'INSTANTS'",
@@ -313,6 +315,10 @@ def fetch_series(conn: Conn, feature_class: str | FeatureClass, feature_id: int)
             else []
         )
         values = instant_values(conn, fc, feature_id, ["_times"])
+        return row, times, vt, vid, x, y, z, tt, tid, a, b, c, props, values
+
+    with reraise():
+        row, times, vt, vid, x, y, z, tt, tid, a, b, c, props, values = consistent_read(conn, "fetch_series", read)
     surfaces = []
     for t in times.tolist():
         v = np.flatnonzero(vt == t)

@@ -40,10 +40,10 @@ from tgsis.db._gmap_common import (
 from tgsis.db._transfer import (
     Columns,
     Storage,
+    consistent_read,
     copy_out,
     insert_feature_row,
     local_positions,
-    read_only_snapshot,
     resolve_class,
 )
 from tgsis.db.classes import FeatureClass
@@ -208,7 +208,9 @@ def fetch_md_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int
         Stored rows that do not make a G-map (see ``tgsis.md_check``).
     """
     fc = gmap_class(conn, feature_class, "MULTIDIM")
-    with reraise(), read_only_snapshot(conn):
+
+    def read() -> tuple[Any, ...]:
+        """The G-map's rows of every table, of one state (:func:`consistent_read`)."""
         head = conn.execute(
             sql.SQL(
                 "SELECT m.dimension, m.embedding, m.axes FROM {} f JOIN tgsis.md_gmap m "
@@ -254,6 +256,10 @@ def fetch_md_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int
                 ),
                 [0],
             )
+        return n, m, axes, vertex, dart, alpha, values
+
+    with reraise():
+        n, m, axes, vertex, dart, alpha, values = consistent_read(conn, "fetch_md_gmap", read)
     images = [alpha[2][alpha[0] == i] for i in range(n + 1)]
     if any(len(a) != len(dart[0]) for a in images):
         raise InvalidGMapError(

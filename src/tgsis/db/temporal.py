@@ -18,6 +18,7 @@ downloaded packed by the server in groups of rows (:func:`get_at`,
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -26,7 +27,7 @@ from psycopg import sql
 from tgsis._series import check_time
 from tgsis.arguments import checked
 from tgsis.db._temporal_common import Conn, assemble_surface, get_at, lifespan, time_args
-from tgsis.db._transfer import class_name, packed_out, read_only_snapshot, resolve_class, rows_by_geoid
+from tgsis.db._transfer import class_name, consistent_read, packed_out, resolve_class, rows_by_geoid
 from tgsis.db.classes import FeatureClass
 from tgsis.db.evolving import append_period, delete_period, fetch_evolving, insert_evolving
 from tgsis.db.instants import add_instant, delete_instant, fetch_series, insert_series
@@ -106,13 +107,15 @@ def surfaces_at(
             hint="features_at lists the features of any class that exist at t",
         )
     t_lit, c_lit = time_args(t, convention)
-    with reraise(), read_only_snapshot(conn):  # the features and their rows of one state
+
+    def read() -> tuple[list[int], dict[int, str], list[npt.NDArray[Any]], list[npt.NDArray[Any]]]:
+        """The features alive at t, their names, vertices and triangles, of one state (:func:`consistent_read`)."""
         alive = features_at(conn, fc, t, convention=convention)
         names = dict(
             conn.execute("SELECT geoid, geoname FROM tgsis.geometry WHERE geoid = ANY (%s)", (alive,)).fetchall()
         )
         wanted = sql.Literal(alive)
-        vg, vid, x, y, z = packed_out(
+        vertices = packed_out(
             conn,
             sql.SQL(
                 "SELECT f.geoid, v.vrtxid, v.x, v.y, v.z FROM unnest({}::bigint[]) AS f(geoid), "
@@ -121,7 +124,7 @@ def surfaces_at(
             [("geoid", "int8"), ("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")],
             ["geoid", "vrtxid"],
         )
-        tg, tid, a, b, c = packed_out(
+        triangles = packed_out(
             conn,
             sql.SQL(
                 "SELECT f.geoid, c.trglid, c.vrtxid1, c.vrtxid2, c.vrtxid3 FROM unnest({}::bigint[]) AS f(geoid), "
@@ -130,6 +133,10 @@ def surfaces_at(
             [("geoid", "int8"), ("trglid", "int8"), ("vrtxid1", "int8"), ("vrtxid2", "int8"), ("vrtxid3", "int8")],
             ["geoid", "trglid"],
         )
+        return alive, names, vertices, triangles
+
+    with reraise():
+        alive, names, (vg, vid, x, y, z), (tg, tid, a, b, c) = consistent_read(conn, "surfaces_at", read)
     vertex_rows = rows_by_geoid(vg, vid, alive) if alive else {}
     triangle_rows = rows_by_geoid(tg, tid, alive) if alive else {}
     result: dict[int, Surface] = {}
@@ -164,13 +171,18 @@ def frames_at(
     """
     check_convention(convention)
     samples = [check_time(t) for t in np.atleast_1d(np.asarray(times, dtype=np.float64)).tolist()]
-    with reraise(), read_only_snapshot(conn):
+
+    def read() -> list[SurfaceFrame]:
+        """Every frame, of one state (:func:`consistent_read`; ``progress`` starts again if it reads again)."""
         frames = []
         for t in samples:
             frames.append((t, get_at(conn, feature_id, t, convention=convention)))
             if progress is not None:
                 progress(len(frames), len(samples))
         return frames
+
+    with reraise():
+        return consistent_read(conn, "frames_at", read)
 
 
 @checked
