@@ -198,7 +198,8 @@ def test_part_runs_work_reads_the_changed_spans_only(
     # the span of cells 10 .. 19 and the cells on the moved vertices: a few dozen, not the object's cells
     assert keys is not None and keys[0] < 100, keys
     assert reads["child_changes_parts"][1][0] - reads["moves_only"][1][0] == 10, (reads, keys)
-    # one decoding of the object's 8 chunks fetches whole_reads; the part change costs two decodings of its chunk
-    # (the span's cells, then their rows in the three states), not the object's chunk versions
+    # one decoding of the object's 8 chunks fetches whole_reads; the part change costs a few decodings of its one
+    # chunk (the span's cells, then their rows in the three states: 2 on PostgreSQL 15, 4 on 18 by the plans),
+    # where every chunk version of the object was decoded (at least whole_reads more)
     extra = read - reads["moves_only"][0]
-    assert whole_reads > 0 and extra < whole_reads / 2, (read, reads, whole_reads)
+    assert whole_reads > 0 and extra < whole_reads, (read, reads, whole_reads)
