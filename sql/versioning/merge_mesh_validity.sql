@@ -25,6 +25,8 @@ RETURNS void
 LANGUAGE plpgsql
 VOLATILE
 SET search_path = pg_catalog, pg_temp
+-- (its statements read work tables sized by the change: compiling them costs more than it saves)
+SET jit = off
 AS $$
 DECLARE
     v_near  bigint[];
@@ -196,13 +198,16 @@ BEGIN
                            UNION ALL SELECT 2, format('non-manifold %ss (in more than two %ss)',
                                                       CASE p_k WHEN 3 THEN 'edge' ELSE 'face' END, p_word)
                             WHERE p_k >= 3 ORDER BY 1 LOOP
+        -- (the keys some state holds so often, grouped once: not a scan of the keys per merged key)
         v_keys := ARRAY(
+            WITH often AS MATERIALIZED (
+                SELECT DISTINCT s.k FROM pg_temp.tgsis_mw_keys s WHERE s.st IN (1, 2, 4) AND s.kind = v_limit
+                 GROUP BY s.st, s.k HAVING count(*) > v_limit)
             SELECT format('(%s%s)', array_to_string(o.k, ', '), CASE WHEN cardinality(o.k) = 1 THEN ',' ELSE '' END)
               FROM (SELECT q.k FROM pg_temp.tgsis_mw_keys q WHERE q.st = 8 AND q.kind = v_limit
                      GROUP BY q.k HAVING count(*) > v_limit
                        AND bool_or(q.id IN (SELECT t.id FROM pg_temp.tgsis_mw_taken t))) AS o
-             WHERE NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_keys s WHERE s.st IN (1, 2, 4) AND s.kind = v_limit AND s.k = o.k
-                                GROUP BY s.st HAVING count(*) > v_limit)
+             WHERE NOT EXISTS (SELECT FROM often s WHERE s.k = o.k)
              ORDER BY o.k);
         IF cardinality(v_keys) > 0 THEN
             v_bad := ARRAY(SELECT DISTINCT q.id FROM pg_temp.tgsis_mw_keys q
