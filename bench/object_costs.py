@@ -21,6 +21,9 @@ write rolled back), each next to the whole-object reads of the same run:
 - ``py_read_change_s``: ``read_merge_change`` (``_read_change``: the change
   and its one-ring, what the Python merge by region reads);
 - ``py_merge_s``: the Python ``tgsis.db.merging.merge_version('v')``;
+- ``sql_merge_mesh_merge_work_s``, ``sql_merge_merge_mesh_validity_s``,
+  ``sql_merge_merge_geometry_row_s``: those functions' own times in the psql
+  merge (``track_functions``, ``pg_stat_xact_user_functions``);
 - ``geometry_row_s``: ``_update_geometry_row_from_rows`` (after a partial
   write: the box and counts of the object);
 - ``check_static_geometry_s``, ``ewkb_geometry_s``, ``compare_geometries_s``
@@ -227,6 +230,19 @@ def main() -> None:
             fig["write_object_rows_rc_s"] = timed(rolled_back(conn, lambda: conn.execute(write, wargs)), r)
         fig["sql_merge_s"] = timed(rolled_back(conn, lambda: conn.execute("SELECT tgsis.merge_version('v')")), r)
         fig["py_merge_s"] = timed(rolled_back(conn, lambda: M.merge_version(conn, "v")), r)
+        # the psql merge's parts by the functions' own times (track_functions), medians of --repeat merges
+        own: dict[str, list[float]] = {}
+        for _ in range(r):
+            conn.rollback()
+            conn.execute("SET track_functions = 'all'")
+            conn.execute("SELECT tgsis.merge_version('v')")
+            for name, total in conn.execute(
+                "SELECT funcname, total_time FROM pg_stat_xact_user_functions"
+                " WHERE funcname IN ('mesh_merge_work', 'merge_mesh_validity', 'merge_geometry_row')"
+            ):
+                own.setdefault(f"sql_merge_{name}_s", []).append(float(total) / 1000)
+            conn.rollback()
+        fig.update({name: float(np.median(values)) for name, values in sorted(own.items())})
 
         load = os.getloadavg()[0]
         print(f"load: {load:.1f} (1 min, {os.cpu_count()} cores)")

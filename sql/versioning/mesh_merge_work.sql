@@ -301,7 +301,8 @@ BEGIN
             SELECT DISTINCT p.x FROM r CROSS JOIN LATERAL (VALUES (r.firstid),
                                                                  (CASE WHEN r.lastid < 9223372036854775807 THEN r.lastid + 1 END)) AS p (x)
              WHERE r.seen <> 0 AND p.x IS NOT NULL),
-        e AS (SELECT b.x AS lo, lead(b.x) OVER (ORDER BY b.x) - 1 AS hi FROM b)
+        -- (the last span: to the end of bigint, kept only if a run reaches it)
+        e AS (SELECT b.x AS lo, coalesce(lead(b.x) OVER (ORDER BY b.x) - 1, 9223372036854775807) AS hi FROM b)
         SELECT coalesce(array_agg(e.lo ORDER BY e.lo), '{}'), coalesce(array_agg(e.hi ORDER BY e.lo), '{}')
           INTO v_lo, v_hi
           FROM e CROSS JOIN LATERAL (
@@ -309,15 +310,17 @@ BEGIN
                           array_agg(r.part ORDER BY r.part) FILTER (WHERE r.seen & 2 <> 0) AS p2,
                           array_agg(r.part ORDER BY r.part) FILTER (WHERE r.seen & 4 <> 0) AS p4
                      FROM r WHERE r.seen <> 0 AND r.firstid <= e.lo AND r.lastid >= e.lo) AS q
-         WHERE e.hi IS NOT NULL
-           AND (q.p1 IS DISTINCT FROM q.p2 OR q.p1 IS DISTINCT FROM q.p4
+         WHERE (q.p1 IS DISTINCT FROM q.p2 OR q.p1 IS DISTINCT FROM q.p4
                 OR cardinality(q.p1) > 1 OR cardinality(q.p2) > 1 OR cardinality(q.p4) > 1);
         IF cardinality(v_lo) > 0 THEN
             IF tgsis.stored_in_chunks(v_table) THEN  -- one id per chunk of the spans: the chunks decoded
-                v_ids := ARRAY(SELECT g.c * t.chunksize
-                                 FROM tgsis.model_tables t, unnest(v_lo, v_hi) AS u (lo, hi),
-                                      generate_series(greatest(u.lo, 0) / t.chunksize, u.hi / t.chunksize) AS g (c)
-                                WHERE t.tablename = v_table AND u.hi >= 0);
+                -- (spans wider than the object's chunks, as a run to the end of bigint: its chunks, not a series)
+                EXECUTE format('SELECT ARRAY(SELECT DISTINCT c.chunk * t.chunksize
+                                               FROM %s c, tgsis.model_tables t, unnest($2, $3) AS u (lo, hi)
+                                              WHERE c.geoid = $1 AND t.tablename = $4
+                                                AND c.chunk BETWEEN greatest(u.lo, 0) / t.chunksize AND u.hi / t.chunksize)',
+                               tgsis.storage_table('tgsis', v_table))
+                   INTO v_ids USING p_geoid, v_lo, v_hi, v_table;
             END IF;
             EXECUTE format('SELECT $3 || ARRAY(SELECT c.%1$I FROM %2$s c JOIN unnest($4, $5) AS r (lo, hi)
                                                   ON c.%1$I BETWEEN r.lo AND r.hi
