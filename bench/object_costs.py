@@ -21,6 +21,9 @@ write rolled back), each next to the whole-object reads of the same run:
 - ``py_read_change_s``: ``read_merge_change`` (``_read_change``: the change
   and its one-ring, what the Python merge by region reads);
 - ``py_merge_s``: the Python ``tgsis.db.merging.merge_version('v')``;
+- ``sql_merge_mesh_merge_work_s``, ``sql_merge_merge_mesh_validity_s``,
+  ``sql_merge_merge_geometry_row_s``: those functions' own times in the psql
+  merge (``track_functions``, ``pg_stat_xact_user_functions``);
 - ``geometry_row_s``: ``_update_geometry_row_from_rows`` (after a partial
   write: the box and counts of the object);
 - ``check_static_geometry_s``, ``ewkb_geometry_s``, ``compare_geometries_s``
@@ -31,10 +34,15 @@ write rolled back), each next to the whole-object reads of the same run:
   whether a stored row changes) and ``write_object_rows_rc_s`` the same write
   in READ COMMITTED.
 
+``--parts``: the surface has two GOCAD parts, kept as runs in ``tgsis.part``
+(the class has no cell property ``part``), and ``v`` also moves the first
+1 % of the cell ids into a third part, every run of the object rewritten
+(as a check-in that changes a part writes them).
+
 Each ``_s`` figure is printed with ``_vs_fetch`` (its ratio to
 ``whole_fetch_s``). The machine is shared: ratios in one run, not times.
 
-    python bench/object_costs.py [--side 1000] [--repeat 3]   # TGSIS_PG=system|embedded
+    python bench/object_costs.py [--side 1000] [--repeat 3] [--parts]   # TGSIS_PG=system|embedded
 """
 
 from __future__ import annotations
@@ -102,10 +110,21 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--side", type=int, default=1000)
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument(
+        "--parts",
+        action="store_true",
+        help="two GOCAD parts kept as runs (tgsis.part); v also moves the first 1 %% of the cell ids into part 2,"
+        " every run rewritten as a check-in writes them",
+    )
     args = parser.parse_args()
 
     surface = tgsis.mesh.spatial_order(grid_surface(args.side))
     n = surface.n_vertices
+    half = surface.n_cells // 2
+    if args.parts:
+        parts = np.zeros(surface.n_cells, dtype=np.int64)
+        parts[half:] = 1
+        surface.cell_properties = {**surface.cell_properties, "part": parts}
     step = 10_000 / (args.side - 1)
     width = step * args.side / 10  # a tenth of the side: 1 % of the vertices
     child_patch = patch_ids(surface.vertices, 2_000, 2_000, width)
@@ -132,6 +151,18 @@ def main() -> None:
         conn.commit()
         move(conn, "v", geoid, child_patch, surface.vertices[child_patch], -3.0)
         move(conn, "DEFAULT", geoid, parent_patch, surface.vertices[parent_patch], 5.0)
+        if args.parts:  # v's part change: every run rewritten (as _state_write._write_parts writes them)
+            span = (0, surface.n_cells // 100 - 1)
+            runs = [(0, span[1], 2), (span[1] + 1, half - 1, 0), (half, surface.n_cells - 1, 1)]
+            with tgsis.in_version(conn, "v"):
+                conn.execute("DELETE FROM tgsis.part WHERE geoid = %s", (geoid,))
+                for first, last, part in runs:
+                    conn.execute(
+                        "INSERT INTO tgsis.part (geoid, firstid, lastid, part) VALUES (%s, %s, %s, %s)",
+                        (geoid, first, last, part),
+                    )
+            conn.commit()
+            print(f"parts: runs {runs} (v), two runs (DEFAULT)")
         print(
             f"version v moved {len(child_patch)} vertices, DEFAULT {len(parent_patch)} others "
             f"({100 * len(child_patch) / n:.2f} % each)"
@@ -198,6 +229,20 @@ def main() -> None:
             fig["write_object_rows_rr_s"] = timed(rolled_back(conn, write_rr, "REPEATABLE READ"), r)
             fig["write_object_rows_rc_s"] = timed(rolled_back(conn, lambda: conn.execute(write, wargs)), r)
         fig["sql_merge_s"] = timed(rolled_back(conn, lambda: conn.execute("SELECT tgsis.merge_version('v')")), r)
+        # the psql merge's parts by the functions' own times (track_functions), medians of --repeat merges (before
+        # the Python merge, which commits its merge)
+        own: dict[str, list[float]] = {}
+        for _ in range(r):
+            conn.rollback()
+            conn.execute("SET track_functions = 'all'")
+            conn.execute("SELECT tgsis.merge_version('v')")
+            for name, total in conn.execute(
+                "SELECT funcname, total_time FROM pg_stat_xact_user_functions"
+                " WHERE funcname IN ('mesh_merge_work', 'merge_mesh_validity', 'merge_geometry_row')"
+            ):
+                own.setdefault(f"sql_merge_{name}_s", []).append(float(total) / 1000)
+            conn.rollback()
+        fig.update({name: float(np.median(values)) for name, values in sorted(own.items())})
         fig["py_merge_s"] = timed(rolled_back(conn, lambda: M.merge_version(conn, "v")), r)
 
         load = os.getloadavg()[0]

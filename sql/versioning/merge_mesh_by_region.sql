@@ -90,6 +90,8 @@ DECLARE
     v_pc8      text[] := '{}';
     v_parts    boolean := false;
     v_runs_old bigint[];
+    v_touched  bigint[];
+    v_same     boolean;
     v_runs_new bigint[];
     v_aid      bigint[];
     v_aref     bigint[];
@@ -213,7 +215,36 @@ BEGIN
      WHERE n.present AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_cold o WHERE o.id = n.id AND o.v = n.v);
     v_cid := ARRAY(SELECT DISTINCT u FROM unnest(v_cid) AS u ORDER BY 1);
     -- the part runs of the version's cells now and of the merged cells (cells in no run stay in none; a run
-    -- never spans a gap in the ids), over every cell: those no state changed have the base's part
+    -- never spans a gap in the ids), over every cell: those no state changed have the base's part. The two
+    -- states differ only at the ids of the work rows (the version's changed cells, the merged ones): when the
+    -- cells of those ids have the same parts in both, so have the runs, and nothing is read beyond those ids
+    -- (stored in chunks: the chunks holding them, not every cell of the version)
+    IF v_parts THEN
+        v_touched := ARRAY(SELECT coalesce(p.old, m.id) FROM pg_temp.tgsis_mr_c m LEFT JOIN pg_temp.tgsis_mr_cmap p ON p.new = m.id
+                            WHERE m.st = 4
+                           UNION SELECT n.id FROM pg_temp.tgsis_mw_c n
+                           ORDER BY 1);
+        EXECUTE format(
+            'WITH kept AS (
+                 SELECT c.%3$I AS id, r.part FROM %1$s c JOIN %2$s r
+                     ON r.geoid = $1 AND r.revision = ANY ($2) AND NOT (r.lastrevs && $2) AND c.%3$I BETWEEN r.firstid AND r.lastid
+                  WHERE c.geoid = $1 AND c.revision = ANY ($2) AND NOT (c.lastrevs && $2) AND c.%3$I = ANY ($3)
+                    AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mr_c m WHERE m.id = c.%3$I)),
+             states AS (
+                 SELECT 4 AS st, k.id, k.part FROM kept k
+                 UNION ALL SELECT 4, coalesce(p.old, m.id), m.part
+                             FROM pg_temp.tgsis_mr_c m LEFT JOIN pg_temp.tgsis_mr_cmap p ON p.new = m.id WHERE m.st = 4
+                 UNION ALL SELECT 8, k.id, k.part FROM kept k
+                            WHERE NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_c n WHERE n.id = k.id)
+                 UNION ALL SELECT 8, n.id, n.part FROM pg_temp.tgsis_mw_c n WHERE n.present)
+             SELECT coalesce(array_agg(ARRAY[s.id, s.part] ORDER BY s.id, s.part) FILTER (WHERE s.st = 4), ''{}'')
+                    IS NOT DISTINCT FROM
+                    coalesce(array_agg(ARRAY[s.id, s.part] ORDER BY s.id, s.part) FILTER (WHERE s.st = 8), ''{}'')
+               FROM states s WHERE s.part >= 0',
+            tgsis.storage_row_versions('tgsis', v_table, v_touched), tgsis.storage_table('tgsis', 'part'), v_cellid)
+          INTO v_same USING p_geoid, v_base, v_touched;
+        v_parts := NOT v_same;
+    END IF;
     IF v_parts THEN
         EXECUTE format(
             'WITH kept AS (

@@ -25,6 +25,8 @@ RETURNS void
 LANGUAGE plpgsql
 VOLATILE
 SET search_path = pg_catalog, pg_temp
+-- (its statements read work tables sized by the change: compiling them costs more than it saves)
+SET jit = off
 AS $$
 DECLARE
     v_near  bigint[];
@@ -35,6 +37,11 @@ DECLARE
     v_limit integer;
     v_msg   text;
 BEGIN
+    -- the work tables read below, made by tgsis.mesh_merge_work / merge_region_plan and never analyzed: without
+    -- statistics the planner took them for a few rows and joined them by nested loops (rows x rows)
+    ANALYZE pg_temp.tgsis_mw_v;
+    ANALYZE pg_temp.tgsis_mw_c;
+    ANALYZE pg_temp.tgsis_mr_margin;
     -- the rows taken from the version or the base (a parent-only merge is the parent's valid state)
     CREATE TEMPORARY TABLE tgsis_mw_drop ON COMMIT DROP AS
     SELECT n.kind, n.id FROM pg_temp.tgsis_mw_node n JOIN pg_temp.tgsis_mw_region g USING (region) WHERE g.src IN (1, 4, 8)
@@ -61,20 +68,25 @@ BEGIN
                     UNION SELECT d.id FROM pg_temp.tgsis_mw_drop d WHERE d.kind = 'v');
     -- the near vertices, in which state each is (st 1 base, 2 parent, 4 version, 8 merged; one no state
     -- changed is in all or none: tgsis_mr_vb holds the base's)
+    -- (joins to each work table grouped once by id, not an EXISTS per near vertex in the select list: a
+    -- correlated subplan scanned tgsis_mr_vb and tgsis_mw_v once per near vertex)
     CREATE TEMPORARY TABLE tgsis_mw_nearv ON COMMIT DROP AS
     SELECT u.id,
            CASE WHEN m.id IS NULL
-                THEN CASE WHEN EXISTS (SELECT FROM pg_temp.tgsis_mr_vb b WHERE b.id = u.id)
+                THEN CASE WHEN b.id IS NOT NULL
                           -- (one a solution removes: in the three states, not in the merged one)
-                          THEN CASE WHEN EXISTS (SELECT FROM pg_temp.tgsis_mw_v n WHERE n.id = u.id AND NOT n.present)
-                                    THEN 7 ELSE 15 END
-                          WHEN EXISTS (SELECT FROM pg_temp.tgsis_mw_v n WHERE n.id = u.id AND n.present) THEN 8  -- a solution's new id
+                          THEN CASE WHEN coalesce(n.absent, false) THEN 7 ELSE 15 END
+                          WHEN coalesce(n.present, false) THEN 8  -- a solution's new id
                           ELSE 0 END
-                ELSE m.st + CASE WHEN EXISTS (SELECT FROM pg_temp.tgsis_mw_v n WHERE n.id = u.id AND n.present) THEN 8 ELSE 0 END
+                ELSE m.st + CASE WHEN coalesce(n.present, false) THEN 8 ELSE 0 END
            END AS st
       FROM unnest(v_near) AS u(id)
       -- the states of each near vertex some state changed, grouped once (not a scan of the work table per vertex)
-      LEFT JOIN (SELECT m.id, sum(DISTINCT m.st) AS st FROM pg_temp.tgsis_mr_v m GROUP BY m.id) AS m ON m.id = u.id;
+      LEFT JOIN (SELECT m.id, sum(DISTINCT m.st) AS st FROM pg_temp.tgsis_mr_v m GROUP BY m.id) AS m ON m.id = u.id
+      LEFT JOIN (SELECT DISTINCT b.id FROM pg_temp.tgsis_mr_vb b) AS b ON b.id = u.id
+      LEFT JOIN (SELECT n.id, bool_or(n.present) AS present, bool_or(NOT n.present) AS absent
+                   FROM pg_temp.tgsis_mw_v n GROUP BY n.id) AS n ON n.id = u.id;
+    ANALYZE pg_temp.tgsis_mw_nearv;
     -- each state's cells on a near vertex: the work tables' rows, and the base's rows of the cells no state changed
     CREATE TEMPORARY TABLE tgsis_mw_local (st smallint NOT NULL, id bigint NOT NULL, v bigint[] NOT NULL) ON COMMIT DROP;
     EXECUTE format('INSERT INTO pg_temp.tgsis_mw_local
@@ -107,6 +119,7 @@ BEGIN
     SELECT m.st, m.id, m.v FROM pg_temp.tgsis_mr_c m WHERE m.v && v_near
     UNION ALL
     SELECT 8, n.id, n.v FROM pg_temp.tgsis_mw_c n WHERE n.present AND n.v && v_near;
+    ANALYZE pg_temp.tgsis_mw_local;
 
     -- cells the merge keeps on vertices it removes
     v_bad := ARRAY(SELECT l.id FROM pg_temp.tgsis_mw_local l
@@ -174,22 +187,27 @@ BEGIN
         ON COMMIT DROP;
     INSERT INTO pg_temp.tgsis_mw_keys
     SELECT l.st, 1, l.id, ARRAY(SELECT x FROM unnest(l.v) AS x ORDER BY x) FROM pg_temp.tgsis_mw_local l;
-    IF p_k >= 3 THEN
+    IF p_k >= 3 THEN  -- a cell's edges / faces: its sorted vertices but one (a sorted array less one element is sorted)
         INSERT INTO pg_temp.tgsis_mw_keys
-        SELECT l.st, 2, l.id, ARRAY(SELECT u.x FROM unnest(l.v) WITH ORDINALITY AS u(x, o) WHERE u.o <> i ORDER BY u.x)
-          FROM pg_temp.tgsis_mw_local l, generate_series(1, p_k) AS i;
+        SELECT q.st, 2, q.id, q.k[1:i - 1] || q.k[i + 1:p_k]
+          FROM pg_temp.tgsis_mw_keys q, generate_series(1, p_k) AS i
+         WHERE q.kind = 1;
     END IF;
+    ANALYZE pg_temp.tgsis_mw_keys;
     FOR v_limit, v_what IN SELECT 1, format('duplicated %ss (the same vertices)', p_word)
                            UNION ALL SELECT 2, format('non-manifold %ss (in more than two %ss)',
                                                       CASE p_k WHEN 3 THEN 'edge' ELSE 'face' END, p_word)
                             WHERE p_k >= 3 ORDER BY 1 LOOP
+        -- (the keys some state holds so often, grouped once: not a scan of the keys per merged key)
         v_keys := ARRAY(
+            WITH often AS MATERIALIZED (
+                SELECT DISTINCT s.k FROM pg_temp.tgsis_mw_keys s WHERE s.st IN (1, 2, 4) AND s.kind = v_limit
+                 GROUP BY s.st, s.k HAVING count(*) > v_limit)
             SELECT format('(%s%s)', array_to_string(o.k, ', '), CASE WHEN cardinality(o.k) = 1 THEN ',' ELSE '' END)
               FROM (SELECT q.k FROM pg_temp.tgsis_mw_keys q WHERE q.st = 8 AND q.kind = v_limit
                      GROUP BY q.k HAVING count(*) > v_limit
                        AND bool_or(q.id IN (SELECT t.id FROM pg_temp.tgsis_mw_taken t))) AS o
-             WHERE NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_keys s WHERE s.st IN (1, 2, 4) AND s.kind = v_limit AND s.k = o.k
-                                GROUP BY s.st HAVING count(*) > v_limit)
+             WHERE NOT EXISTS (SELECT FROM often s WHERE s.k = o.k)
              ORDER BY o.k);
         IF cardinality(v_keys) > 0 THEN
             v_bad := ARRAY(SELECT DISTINCT q.id FROM pg_temp.tgsis_mw_keys q
@@ -203,13 +221,16 @@ BEGIN
     END LOOP;
 
     -- vertices near the change left without cells, which no state leaves so
+    -- (per vertex, the states that have a cell on it: one pass over the cells' corners, joined by id, not a
+    -- scan of the cells per near vertex)
     v_badv := ARRAY(SELECT x.id FROM pg_temp.tgsis_mw_nearv x
+                      LEFT JOIN (SELECT u.vid, bit_or(l.st::integer) AS sts
+                                   FROM pg_temp.tgsis_mw_local l CROSS JOIN LATERAL unnest(l.v) AS u (vid)
+                                  GROUP BY u.vid) AS c ON c.vid = x.id
                      WHERE x.st & 8 <> 0
-                       AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_local l WHERE l.st = 8 AND x.id = ANY (l.v))
-                       AND NOT EXISTS (SELECT FROM (VALUES (1), (2), (4)) AS s (st)
-                                        WHERE x.st & s.st <> 0
-                                          AND NOT EXISTS (SELECT FROM pg_temp.tgsis_mw_local l
-                                                           WHERE l.st = s.st AND x.id = ANY (l.v)))
+                       AND coalesce(c.sts, 0) & 8 = 0
+                       -- (every state of base, parent, version that has the vertex has a cell on it)
+                       AND (x.st & 7) & ~coalesce(c.sts, 0) = 0
                      ORDER BY x.id);
     IF cardinality(v_badv) > 0 THEN
         RAISE EXCEPTION '%: invalid merge: %: the merge would leave vertices % without %s, which no state does', p_refused,

@@ -124,6 +124,8 @@ DECLARE
     v_top     text[];
     v_last    bigint;
     v_atoms   text := '';
+    v_lo      bigint[];
+    v_hi      bigint[];
 BEGIN
     SELECT * INTO v_version FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
     IF v_version.parentid IS NULL THEN
@@ -280,12 +282,52 @@ BEGIN
     IF v_ccanon IS NOT NULL THEN
         v_ckeys := v_ckeys || ARRAY(SELECT r.key FROM tgsis.merge_property_rows(v_cpt, p_geoid, v_since, NULL, NULL, NULL, NULL, p_times, p_timem) AS r);
     END IF;
-    IF v_runs THEN  -- the cells of a part run some set sees otherwise may change their part
-        EXECUTE format('SELECT $3 || ARRAY(SELECT c.%1$I FROM %2$s c
-                                            JOIN (SELECT v.firstid, v.lastid FROM tgsis.part_ver v WHERE v.geoid = $1 AND %3$s) r
-                                              ON c.%1$I BETWEEN r.firstid AND r.lastid
-                                           WHERE c.geoid = $1)', v_cellid, v_csrc, v_changed)
-           INTO v_ckeys USING p_geoid, v_since, v_ckeys;
+    IF v_runs THEN
+        -- the cells whose part some state sees otherwise: those of the id spans where the runs the three states
+        -- see (tgsis.part, a few rows per object) give another part, or more than one, in some state (the runs'
+        -- ends cut the ids into spans each run covers whole or not at all; a run no set sees otherwise is in
+        -- every state or none and changes nothing). A rewrite of every run of the object (as a check-in writes
+        -- them) that changes one run leaves that run's span only. Then the cells of those spans only: stored in
+        -- chunks, the chunks that hold them (not every cell version of the object)
+        WITH r AS (
+            SELECT v.firstid, v.lastid, v.part,
+                   (v.revision = ANY (v_base) AND NOT (v.revclosed AND v.lastrevs && v_base))::integer
+                   | ((v.revision = ANY (v_parent.workingset) AND NOT (v.revclosed AND v.lastrevs && v_parent.workingset))::integer << 1)
+                   | ((v.revision = ANY (v_version.workingset) AND NOT (v.revclosed AND v.lastrevs && v_version.workingset))::integer << 2)
+                       AS seen
+              FROM tgsis.part_ver v
+             WHERE v.geoid = p_geoid AND v.firstid <= v.lastid),
+        b AS (
+            SELECT DISTINCT p.x FROM r CROSS JOIN LATERAL (VALUES (r.firstid),
+                                                                 (CASE WHEN r.lastid < 9223372036854775807 THEN r.lastid + 1 END)) AS p (x)
+             WHERE r.seen <> 0 AND p.x IS NOT NULL),
+        -- (the last span: to the end of bigint, kept only if a run reaches it)
+        e AS (SELECT b.x AS lo, coalesce(lead(b.x) OVER (ORDER BY b.x) - 1, 9223372036854775807) AS hi FROM b)
+        SELECT coalesce(array_agg(e.lo ORDER BY e.lo), '{}'), coalesce(array_agg(e.hi ORDER BY e.lo), '{}')
+          INTO v_lo, v_hi
+          FROM e CROSS JOIN LATERAL (
+                   SELECT array_agg(r.part ORDER BY r.part) FILTER (WHERE r.seen & 1 <> 0) AS p1,
+                          array_agg(r.part ORDER BY r.part) FILTER (WHERE r.seen & 2 <> 0) AS p2,
+                          array_agg(r.part ORDER BY r.part) FILTER (WHERE r.seen & 4 <> 0) AS p4
+                     FROM r WHERE r.seen <> 0 AND r.firstid <= e.lo AND r.lastid >= e.lo) AS q
+         WHERE (q.p1 IS DISTINCT FROM q.p2 OR q.p1 IS DISTINCT FROM q.p4
+                OR cardinality(q.p1) > 1 OR cardinality(q.p2) > 1 OR cardinality(q.p4) > 1);
+        IF cardinality(v_lo) > 0 THEN
+            IF tgsis.stored_in_chunks(v_table) THEN  -- one id per chunk of the spans: the chunks decoded
+                -- (spans wider than the object's chunks, as a run to the end of bigint: its chunks, not a series)
+                EXECUTE format('SELECT ARRAY(SELECT DISTINCT c.chunk * t.chunksize
+                                               FROM %s c, tgsis.model_tables t, unnest($2, $3) AS u (lo, hi)
+                                              WHERE c.geoid = $1 AND t.tablename = $4
+                                                AND c.chunk BETWEEN greatest(u.lo, 0) / t.chunksize AND u.hi / t.chunksize)',
+                               tgsis.storage_table('tgsis', v_table))
+                   INTO v_ids USING p_geoid, v_lo, v_hi, v_table;
+            END IF;
+            EXECUTE format('SELECT $3 || ARRAY(SELECT c.%1$I FROM %2$s c JOIN unnest($4, $5) AS r (lo, hi)
+                                                  ON c.%1$I BETWEEN r.lo AND r.hi
+                                               WHERE c.geoid = $1)',
+                           v_cellid, tgsis.storage_row_versions('tgsis', v_table, v_ids))
+               INTO v_ckeys USING p_geoid, NULL::integer[], v_ckeys, v_lo, v_hi;
+        END IF;
     END IF;
     v_vkeys := ARRAY(SELECT DISTINCT k FROM unnest(v_vkeys) AS k);
     v_ckeys := ARRAY(SELECT DISTINCT k FROM unnest(v_ckeys) AS k);
