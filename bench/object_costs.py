@@ -20,7 +20,8 @@ write rolled back), each next to the whole-object reads of the same run:
   validity check ``tgsis.merge_mesh_validity``, the write);
 - ``py_read_change_s``: ``read_merge_change`` (``_read_change``: the change
   and its one-ring, what the Python merge by region reads);
-- ``py_merge_s``: the Python ``tgsis.db.merging.merge_version('v')``;
+- ``py_merge_s``: the Python ``tgsis.db.merging.merge_version('v')`` (what it
+  wrote printed: the same at every repeat, every repeat rolled back);
 - ``geometry_row_s``: ``_update_geometry_row_from_rows`` (after a partial
   write: the box and counts of the object);
 - ``check_static_geometry_s``, ``ewkb_geometry_s``, ``compare_geometries_s``
@@ -59,12 +60,17 @@ Conn = psycopg.Connection[Any]
 
 
 def rolled_back(conn: Conn, action: Callable[[], Any], isolation: str | None = None) -> Callable[[], Any]:
-    """``action`` in a transaction rolled back afterwards."""
+    """``action`` in a transaction rolled back afterwards.
+
+    The transaction is open before ``action`` runs: a function that opens its own when the connection is
+    idle (``conn.transaction()``, ``tgsis.in_version``: the Python merge, the geometry row's update) would
+    commit it, and the next repeat would time a merge with nothing left to merge (the 0.03 s ``py_merge_s``
+    of plan F's runs). Opened, such a function runs in a savepoint this rollback undoes.
+    """
 
     def run() -> Any:
         conn.rollback()
-        if isolation:
-            conn.execute(f"SET TRANSACTION ISOLATION LEVEL {isolation}")
+        conn.execute(f"SET TRANSACTION ISOLATION LEVEL {isolation or 'READ COMMITTED'}")  # (opens it)
         try:
             return action()
         finally:
@@ -198,7 +204,22 @@ def main() -> None:
             fig["write_object_rows_rr_s"] = timed(rolled_back(conn, write_rr, "REPEATABLE READ"), r)
             fig["write_object_rows_rc_s"] = timed(rolled_back(conn, lambda: conn.execute(write, wargs)), r)
         fig["sql_merge_s"] = timed(rolled_back(conn, lambda: conn.execute("SELECT tgsis.merge_version('v')")), r)
-        fig["py_merge_s"] = timed(rolled_back(conn, lambda: M.merge_version(conn, "v")), r)
+        merged: list[tuple[int, int, int, int]] = []
+
+        def py_merge() -> None:
+            result = M.merge_version(conn, "v")
+            merged.append(
+                (result.rows_by_region, result.rows_copied, result.chunk_versions_copied, len(result.objects))
+            )
+
+        fig["py_merge_s"] = timed(rolled_back(conn, py_merge), r)
+        # every repeat merged the same (nothing of an earlier one was kept), and something
+        assert len(set(merged)) == 1 and sum(merged[0][:3]) > 0, merged
+        print(
+            "py_merge wrote: {} rows by region, {} rows and {} chunk versions copied, {} object(s) by region".format(
+                *merged[0]
+            )
+        )
 
         load = os.getloadavg()[0]
         print(f"load: {load:.1f} (1 min, {os.cpu_count()} cores)")
