@@ -20,10 +20,11 @@ write rolled back), each next to the whole-object reads of the same run:
   validity check ``tgsis.merge_mesh_validity``, the write);
 - ``py_read_change_s``: ``read_merge_change`` (``_read_change``: the change
   and its one-ring, what the Python merge by region reads);
-- ``py_merge_s``: the Python ``tgsis.db.merging.merge_version('v')``;
 - ``sql_merge_mesh_merge_work_s``, ``sql_merge_merge_mesh_validity_s``,
   ``sql_merge_merge_geometry_row_s``: those functions' own times in the psql
   merge (``track_functions``, ``pg_stat_xact_user_functions``);
+- ``py_merge_s``: the Python ``tgsis.db.merging.merge_version('v')`` (what it
+  wrote printed: the same at every repeat, every repeat rolled back);
 - ``geometry_row_s``: ``_update_geometry_row_from_rows`` (after a partial
   write: the box and counts of the object);
 - ``check_static_geometry_s``, ``ewkb_geometry_s``, ``compare_geometries_s``
@@ -67,12 +68,17 @@ Conn = psycopg.Connection[Any]
 
 
 def rolled_back(conn: Conn, action: Callable[[], Any], isolation: str | None = None) -> Callable[[], Any]:
-    """``action`` in a transaction rolled back afterwards."""
+    """``action`` in a transaction rolled back afterwards.
+
+    The transaction is open before ``action`` runs: a function that opens its own when the connection is
+    idle (``conn.transaction()``, ``tgsis.in_version``: the Python merge, the geometry row's update) would
+    commit it, and the next repeat would time a merge with nothing left to merge (the 0.03 s ``py_merge_s``
+    of plan F's runs). Opened, such a function runs in a savepoint this rollback undoes.
+    """
 
     def run() -> Any:
         conn.rollback()
-        if isolation:
-            conn.execute(f"SET TRANSACTION ISOLATION LEVEL {isolation}")
+        conn.execute(f"SET TRANSACTION ISOLATION LEVEL {isolation or 'READ COMMITTED'}")  # (opens it)
         try:
             return action()
         finally:
@@ -229,8 +235,8 @@ def main() -> None:
             fig["write_object_rows_rr_s"] = timed(rolled_back(conn, write_rr, "REPEATABLE READ"), r)
             fig["write_object_rows_rc_s"] = timed(rolled_back(conn, lambda: conn.execute(write, wargs)), r)
         fig["sql_merge_s"] = timed(rolled_back(conn, lambda: conn.execute("SELECT tgsis.merge_version('v')")), r)
-        # the psql merge's parts by the functions' own times (track_functions), medians of --repeat merges (before
-        # the Python merge, which commits its merge)
+        # the psql merge's parts by the functions' own times (track_functions), medians of --repeat merges, each
+        # rolled back
         own: dict[str, list[float]] = {}
         for _ in range(r):
             conn.rollback()
@@ -243,7 +249,22 @@ def main() -> None:
                 own.setdefault(f"sql_merge_{name}_s", []).append(float(total) / 1000)
             conn.rollback()
         fig.update({name: float(np.median(values)) for name, values in sorted(own.items())})
-        fig["py_merge_s"] = timed(rolled_back(conn, lambda: M.merge_version(conn, "v")), r)
+        merged: list[tuple[int, int, int, int]] = []
+
+        def py_merge() -> None:
+            result = M.merge_version(conn, "v")
+            merged.append(
+                (result.rows_by_region, result.rows_copied, result.chunk_versions_copied, len(result.objects))
+            )
+
+        fig["py_merge_s"] = timed(rolled_back(conn, py_merge), r)
+        # every repeat merged the same (nothing of an earlier one was kept), and something
+        assert len(set(merged)) == 1 and sum(merged[0][:3]) > 0, merged
+        print(
+            "py_merge wrote: {} rows by region, {} rows and {} chunk versions copied, {} object(s) by region".format(
+                *merged[0]
+            )
+        )
 
         load = os.getloadavg()[0]
         print(f"load: {load:.1f} (1 min, {os.cpu_count()} cores)")

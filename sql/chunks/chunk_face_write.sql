@@ -44,6 +44,9 @@
 --     today's view writes row by row (one group's revision for both was
 --     TG300). INSERT, DELETE and key changes are written per
 --     row through pg_temp.tgsis_face_now_<view oid>.
+-- (A write whose snapshot predates the chunk table's last rewrite, which such
+-- a snapshot sees empty, is refused before, by the face's statement trigger
+-- tgsis.chunk_snapshot_check.)
 -- The temporary tables are refused (42501) when the session made them itself
 -- (another owner): rows written here come only from the face's own rows.
 -- SECURITY DEFINER: it writes the chunk table as its owner.

@@ -14,8 +14,11 @@
 -- of today's relation tgsis.<table> when it exists (the view or table the
 -- face will replace), else the storage's. Writes: INSTEAD OF triggers running
 -- tgsis.chunk_face_write (each row; and after each UPDATE statement, the
--- flush of the queued rows), and for versioned storage the write right's
--- statement check (tgsis.view_write_check) as today's views have it.
+-- flush of the queued rows), before each statement
+-- tgsis.chunk_snapshot_check (40001 for a snapshot older than the chunk
+-- table's last rewrite, which it sees empty), and for versioned storage the
+-- write right's statement check (tgsis.view_write_check) as today's views
+-- have it.
 -- p_view names the view (default: the table's own name, what the storage
 -- switch will use; the tests build the face beside today's live table).
 -- Not idempotent: TG201 when the view exists. Runs with the caller's rights
@@ -97,6 +100,9 @@ BEGIN
                    'FOR EACH ROW EXECUTE FUNCTION tgsis.chunk_face_write(%L)', v_face, p_table);
     EXECUTE format('CREATE TRIGGER tgsis_chunk_face_flush AFTER UPDATE ON %s '
                    'FOR EACH STATEMENT EXECUTE FUNCTION tgsis.chunk_face_write(%L)', v_face, p_table);
+    -- a snapshot older than the chunk table's last rewrite sees it empty: its writes are refused (40001)
+    EXECUTE format('CREATE TRIGGER tgsis_chunk_face_snapshot BEFORE INSERT OR UPDATE OR DELETE ON %s '
+                   'FOR EACH STATEMENT EXECUTE FUNCTION tgsis.chunk_snapshot_check(%L)', v_face, v_chunk::text);
     IF v_versioned THEN
         EXECUTE format('CREATE TRIGGER tgsis_versioning_rights BEFORE INSERT OR UPDATE OR DELETE ON %s '
                        'FOR EACH STATEMENT EXECUTE FUNCTION tgsis.view_write_check()', v_face);

@@ -19,10 +19,14 @@
 -- on its row definition <table>_shape, the chunk table's arrays added (the
 -- default at present slots, NULL at holes, in every chunk version), renamed or
 -- dropped, the chunk view and the face made again with the face's grants and
--- the columns' comments; the conflicts' marks of a versioned class renewed
--- (the change alters no value a version sees: solved conflicts stay solved);
+-- the columns' comments;
 -- what the chunks cannot hold (a vector property, a reserved name, no
 -- property left) is refused by name (TG100), nothing changed.
+-- A versioned table's conflicts' marks are renewed, in rows as in chunks
+-- (tgsis.conflict_marks before, tgsis.renew_conflict_marks after): a column
+-- added or dropped changes the stored rows' fingerprints without changing a
+-- value either side chose, so solved conflicts stay solved; a later edit
+-- unsolves them as before.
 CREATE FUNCTION tgsis.alter_class_table(p_class tgsis.catalog, p_table text, p_alters text[],
                                         p_properties jsonb DEFAULT '[]', p_what text DEFAULT NULL)
 RETURNS void
@@ -48,9 +52,10 @@ BEGIN
     v_chunked := to_regclass(format('%I.%I', v_schema, p_table || '_shape')) IS NOT NULL
                  AND to_regclass(format('%I.%I', v_schema, p_table || '_chunk')) IS NOT NULL
                  AND (SELECT c.relkind FROM pg_class c WHERE c.oid = to_regclass(format('%I.%I', v_schema, p_table))) = 'v';
-    IF v_chunked AND EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = v_schema AND t.tablename = p_table) THEN
-        -- the conflicts' marks fingerprint the stored chunk versions, which a new or dropped array changes without
-        -- changing a value any version sees of the other properties: read before, renewed after
+    IF EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = v_schema AND t.tablename = p_table) THEN
+        -- the conflicts' marks fingerprint the stored row versions (record_out of each <table>_ver row) or chunk
+        -- versions, which a new or dropped column changes without changing a value either side of a conflict
+        -- chose: read before, renewed after, in both storages (solved conflicts stay solved)
         v_marks := tgsis.conflict_marks();
     END IF;
     -- the class view is made again by tgsis.create_class_view; the rights granted on it since are kept

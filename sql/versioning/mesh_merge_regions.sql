@@ -48,7 +48,9 @@
 -- feature's class is refused (42501): regions computed without its rows
 -- would be wrong. A feature not changed on both sides is refused (TG300),
 -- one that does not merge by region (tgsis.region_merge_refusal: deleted on
--- one side, ...) too (TG100), as the Python reader refuses them. extra_float_digits is pinned: values are
+-- one side, ...) too (TG100), as the Python reader refuses them; one with a
+-- NaN or infinite coordinate among the rows read (of any state) is refused
+-- by name (TG302, as tgsis.merge_mesh_by_region refuses its merge). extra_float_digits is pinned: values are
 -- compared as text, floats exactly; client_min_messages too: dropping the
 -- work tables of an earlier call says nothing.
 CREATE FUNCTION tgsis.mesh_merge_regions(p_version text, p_geoid bigint, p_times float8 DEFAULT NULL,
@@ -66,6 +68,7 @@ AS $$
 #variable_conflict use_column
 DECLARE
     v_out     jsonb;
+    v_why     text;
 BEGIN
     -- the work, in a subtransaction rolled back once the regions are in v_out: neither the work tables nor
     -- the locks on them outlive the call (a relation created and dropped keeps its lock until the
@@ -75,6 +78,28 @@ BEGIN
     IF tgsis.mesh_merge_work(p_version, p_geoid, p_times, p_timem) = 0 THEN  -- no region
         v_out := '[]';
         RAISE EXCEPTION 'tgsis_mr_done';
+    END IF;
+    -- a state with non-finite coordinates (NaN, infinity: a psql UPDATE stores them) among the rows read is no
+    -- mesh merge3 takes, and tgsis.merge_mesh_by_region refuses its merge: refused here too (TG302, through the
+    -- handler below), so that no region is stored for a merge that will be refused (PostgreSQL's float8 takes
+    -- NaN as equal to NaN: the comparisons above would not see it)
+    -- (the ids listed here, not by tgsis.merge_ids_text: this runs with the caller's rights)
+    SELECT format('feature %s (%s): vertices %s have non-finite coordinates', p_geoid,
+                  CASE s.st WHEN 1 THEN 'base' WHEN 2 THEN 'parent' ELSE 'child' END,
+                  (SELECT string_agg(i.id::text, ', ' ORDER BY i.id) || CASE WHEN max(i.n) > 10 THEN ', ...' ELSE '' END
+                     FROM (SELECT m.id, count(*) OVER () AS n
+                             FROM (SELECT m.id, m.x, m.y, m.z FROM pg_temp.tgsis_mr_v m WHERE m.st = s.st
+                                   UNION ALL SELECT b.id, b.x, b.y, b.z FROM pg_temp.tgsis_mr_vb b) AS m
+                            WHERE 'NaN'::float8 IN (m.x, m.y, m.z) OR 'Infinity'::float8 IN (abs(m.x), abs(m.y), abs(m.z))
+                            ORDER BY m.id LIMIT 10) AS i))
+      INTO v_why
+      FROM (VALUES (1::smallint), (2), (4)) AS s (st)
+     WHERE EXISTS (SELECT FROM (SELECT m.x, m.y, m.z FROM pg_temp.tgsis_mr_v m WHERE m.st = s.st
+                                UNION ALL SELECT b.x, b.y, b.z FROM pg_temp.tgsis_mr_vb b) AS m
+                    WHERE 'NaN'::float8 IN (m.x, m.y, m.z) OR 'Infinity'::float8 IN (abs(m.x), abs(m.y), abs(m.z)))
+     ORDER BY s.st LIMIT 1;
+    IF v_why IS NOT NULL THEN
+        RAISE EXCEPTION 'tgsis_mr_refused';
     END IF;
     -- 8. per region: its ids, each side's edit, box, largest displacements, conflict (tgsis_mr_vb: the
     -- base's coordinates of vertices no side changed, corners of the region's cells)
@@ -148,7 +173,11 @@ BEGIN
       FROM facts f LEFT JOIN boxes b ON b.region = f.region) AS q;
     RAISE EXCEPTION 'tgsis_mr_done';  -- rolls the work tables and their locks back
     EXCEPTION WHEN raise_exception THEN
-        IF SQLERRM <> 'tgsis_mr_done' THEN
+        IF SQLERRM = 'tgsis_mr_refused' THEN  -- (raised after the work's rollback: its tables and locks gone)
+            RAISE EXCEPTION 'the regions of feature % are not found: %', p_geoid, v_why
+                USING ERRCODE = 'TG302',
+                      HINT = 'correct the coordinates in the version or its parent, or solve it as a whole object (tgsis.resolve_conflict)';
+        ELSIF SQLERRM <> 'tgsis_mr_done' THEN
             RAISE;
         END IF;
     END;

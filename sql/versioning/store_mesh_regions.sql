@@ -8,7 +8,9 @@
 -- read the feature's class (the Python client would not read it either),
 -- or when the feature does not merge by region (tgsis.region_merge_refusal,
 -- or mesh_merge_regions' TG100: new ids that cannot be renumbered within
--- bigint), so that one such feature does not make find_conflicts fail.
+-- bigint; or its TG302: a NaN or infinite coordinate among the rows read,
+-- whose merge tgsis.merge_mesh_by_region refuses), so that one such feature
+-- does not make find_conflicts fail.
 -- A surface at instants (model 2) or an evolving surface (model 3): the rows of
 -- tgsis.instants_merge_regions (each with its slice: the instant or geometry instant, times, and the
 -- period, timem; numbered through the object), none for an object-level conflict (or a model-3 object
@@ -81,7 +83,9 @@ BEGIN
                CASE WHEN m.conflict THEN 'unsolved' ELSE 'automatic' END
           FROM tgsis.mesh_merge_regions(p_version, p_objectkey::bigint) AS m;
         GET DIAGNOSTICS v_count = ROW_COUNT;
-    EXCEPTION WHEN SQLSTATE 'TG100' THEN  -- it does not merge by region after all (new ids beyond bigint)
+    EXCEPTION WHEN SQLSTATE 'TG100' OR SQLSTATE 'TG302' THEN
+        -- it does not merge by region after all (new ids beyond bigint; non-finite coordinates, which
+        -- tgsis.mesh_merge_regions refuses as tgsis.merge_mesh_by_region does): nothing stored
         RETURN 0;
     END;
     RETURN v_count;

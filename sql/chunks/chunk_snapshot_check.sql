@@ -1,0 +1,46 @@
+-- tgsis.chunk_snapshot_check(): a chunk face's statement trigger refusing a write whose snapshot predates the chunk table's last rewrite.
+-- tgsis.alter_chunk_table adds a property by rewriting the chunk table
+-- (ALTER ... USING), and a rewrite is not MVCC-safe: a transaction whose
+-- snapshot was taken before it committed (REPEATABLE READ, SERIALIZABLE)
+-- sees the table empty, so an UPDATE or DELETE through the face would find
+-- no row and silently write nothing, and an INSERT would not see the rows
+-- there. Fired BEFORE each INSERT, UPDATE and DELETE statement on the face
+-- (tgsis.create_chunk_face; TG_ARGV[0]: the chunk table's qualified name):
+-- when the file of the chunk table (or of one of its partitions) that the
+-- catalog names now (pg_relation_filenode, the catalog's latest state) is
+-- not the one the transaction's snapshot reads in pg_class, the table was
+-- rewritten after the snapshot and the statement is refused with 40001
+-- (serialization failure: the retry of the transaction sees the new table).
+-- Under READ COMMITTED a statement's snapshot is taken after the lock it
+-- waited for, and a transaction's own rewrite is in its snapshot: nothing is
+-- refused. Other changes (GRANT, a rename) keep the file and refuse nothing.
+-- Runs with the writer's rights (pg_class and pg_relation_filenode are
+-- everyone's).
+CREATE FUNCTION tgsis.chunk_snapshot_check()
+RETURNS trigger
+LANGUAGE plpgsql
+VOLATILE
+SET search_path = pg_catalog, pg_temp
+AS $$
+DECLARE
+    v_chunk regclass := TG_ARGV[0]::regclass;
+BEGIN
+    -- the table itself, or its partitions (tgsis.partition_chunk_storage); a partitioned parent has no file
+    IF EXISTS (SELECT FROM (SELECT v_chunk::oid AS relid UNION SELECT t.relid FROM pg_partition_tree(v_chunk) t) r
+                 LEFT JOIN pg_class c ON c.oid = r.relid   -- (read with the transaction's snapshot)
+                WHERE pg_relation_filenode(r.relid) IS NOT NULL
+                  AND c.relfilenode IS DISTINCT FROM pg_relation_filenode(r.relid)) THEN
+        RAISE EXCEPTION 'could not serialize access: % was rewritten after this transaction''s snapshot', v_chunk
+            USING ERRCODE = 'serialization_failure',
+                  DETAIL = format('%s.%s is stored in %s, which a transaction that committed after this one took its snapshot rewrote (a property added): this snapshot sees it empty.',
+                                  TG_TABLE_SCHEMA, TG_TABLE_NAME, v_chunk),
+                  HINT = 'retry the transaction';
+    END IF;
+    RETURN NULL;
+END
+$$;
+
+REVOKE ALL ON FUNCTION tgsis.chunk_snapshot_check() FROM PUBLIC;
+
+COMMENT ON FUNCTION tgsis.chunk_snapshot_check() IS
+    'BEFORE statement trigger of a chunk face (tgsis.create_chunk_face; TG_ARGV[0] the chunk table): refuses (40001) an INSERT, UPDATE or DELETE whose transaction snapshot predates the last rewrite of the chunk table or a partition of it (tgsis.alter_chunk_table adding a property; such a snapshot sees the table empty): the file the catalog names now differs from the one pg_class shows in the snapshot';
