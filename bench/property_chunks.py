@@ -167,6 +167,10 @@ def checkins(
     try:
         with tgsis.in_version(conn, f"{prefix}e1"):
             for _ in range(repeat):
+                for name in names:  # the check-in reads the stored state: the read's share of it
+                    fetched = seconds(lambda n=name: F.fetch_feature(conn, f"{prefix}{n}", geoids[n]))
+                    times.setdefault(f"{name}_fetch", []).append(fetched)
+                    conn.commit()
                 for share in shares or ("1pct", "100pct"):
                     for name in names:
                         stored = F.fetch_feature(conn, f"{prefix}{name}", geoids[name]).mesh
@@ -194,6 +198,8 @@ def report_checkins(
     t: dict[str, float], names: tuple[str, ...], prefix: str, size: int, shares: tuple[str, ...] = ()
 ) -> None:
     print(f"{prefix}vertices: {size}")
+    for name in names:
+        print(f"{prefix}fetch_in_version_{name}_s: {t[f'{name}_fetch']:.3f}")
     for share in shares or ("1pct", "100pct"):
         for name in names:
             print(f"{prefix}checkin_{share}_{name}_s: {t[f'{name}_{share}']:.3f}")
