@@ -15,9 +15,16 @@ bare mesh's, and the property's part of the fetch's query is timed alone (``prop
 times the path before the bulk one (the face's rows, its trigger row by row) on a surface of ``--face-side``
 (the face's upload takes milliseconds a row). ``--alter`` times instead add_property, rename_property and
 drop_property on the class in chunks (in place, ``tgsis.alter_chunk_table``) and, unversioned, the round trip
-through rows that an add cost before, in the same run. Prints ``name: value`` lines.
+through rows that an add cost before, in the same run. ``--checkin`` times instead the check-in by
+difference (``save_feature`` in version e1 of a versioned class) of a 1 % property edit (every 100th vertex:
+scattered, every chunk touched) and of a 100 % one, for classes ``bare`` (no property: the mesh's own
+check-in), ``onrows`` and ``inchunks`` (switched after the upload), the property's share less ``bare``'s;
+``--shares 1pctlocal`` the first 1 % of the ids (a region in the spatial order);
+with ``--face`` also the path before (the face's rows, ``tgsis.db.checkin.write_property_rows`` off) against
+the bulk one on a surface of ``--face-side``. Prints ``name: value`` lines.
 
     .venv/bin/python bench/property_chunks.py [--side 1000] [--order spatial|file] [--versioned] [--repeat 3] [--face] [--alter]
+    .venv/bin/python bench/property_chunks.py --checkin [--side 1000] [--repeat 1] [--shares 1pct,100pct] [--face] [--face-side 30]
 """
 
 from __future__ import annotations
@@ -34,6 +41,7 @@ from transfer import grid_surface
 
 import tgsis
 import tgsis.db._static as static
+import tgsis.db.checkin as checkin
 from tgsis.db import features as F
 from tgsis.db._transfer import Packed, columns_out_all
 from tgsis.db.versions import storage_table
@@ -127,6 +135,87 @@ def alter(conn: Conn, round_trip: bool) -> None:
         print(f"in_place_add_to_round_trip: {timed['add'] / trip_s:.3f}")
 
 
+#: the property edits of --checkin: the ids changed (of n vertices)
+EDITS: dict[str, Callable[[int], slice]] = {
+    "1pct": lambda n: slice(None, None, 100),  # every 100th vertex: scattered, every chunk touched
+    "1pctlocal": lambda n: slice(0, n // 100),  # the first 1 % of the ids: a region in the spatial order
+    "100pct": lambda n: slice(None),
+}
+
+
+def checkins(
+    conn: Conn, surface: Any, repeat: int, names: tuple[str, ...], prefix: str = "", shares: tuple[str, ...] = ()
+) -> dict[str, float]:
+    """Medians of save_feature (in e1, rolled back after each) of the property edits ``shares``, per class."""
+    props = [("porosity", "double precision")]
+    for name in names:
+        tgsis.create_feature_class(conn, f"{prefix}{name}", "SURFACE", cell_properties=[] if name == "bare" else props)
+    versioned = conn.execute("SELECT EXISTS (SELECT FROM tgsis.versioned_tables)").fetchone()
+    if versioned != (True,):
+        tgsis.enable_feature_versioning(conn)
+    conn.commit()
+    bare = tgsis.Surface(surface.vertices, surface.cells)
+    geoids = {n: F.insert_feature(conn, f"{prefix}{n}", bare if n == "bare" else surface) for n in names}
+    conn.commit()
+    for name in names:
+        if name.startswith("inchunks"):
+            conn.execute("SELECT tgsis.store_class_in_chunks(%s)", (f"{prefix}{name}",))
+    tgsis.create_version(conn, f"{prefix}e1")
+    conn.commit()
+    times: dict[str, list[float]] = {}
+    saved = checkin.write_property_rows
+    try:
+        with tgsis.in_version(conn, f"{prefix}e1"):
+            for _ in range(repeat):
+                for name in names:  # the check-in reads the stored state: the read's share of it
+                    fetched = seconds(lambda n=name: F.fetch_feature(conn, f"{prefix}{n}", geoids[n]))
+                    times.setdefault(f"{name}_fetch", []).append(fetched)
+                    conn.commit()
+                for share in shares or ("1pct", "100pct"):
+                    for name in names:
+                        stored = F.fetch_feature(conn, f"{prefix}{name}", geoids[name]).mesh
+                        conn.commit()
+                        assert isinstance(stored, tgsis.Surface)
+                        props_now = dict(stored.vertex_properties)
+                        if name != "bare":
+                            porosity = props_now["porosity"].copy()
+                            porosity[EDITS[share](len(porosity))] += 1.0
+                            props_now["porosity"] = porosity
+                        edited = tgsis.Surface(stored.vertices, stored.cells, vertex_properties=props_now)
+                        if name.endswith("face"):  # the path before: the face's rows, its trigger row by row
+                            checkin.write_property_rows = lambda *a: None  # type: ignore[assignment]
+                        conn.execute("SELECT 1")  # one transaction, rolled back: each run from the same state
+                        taken = seconds(lambda n=name, e=edited: tgsis.save_feature(conn, f"{prefix}{n}", geoids[n], e))
+                        checkin.write_property_rows = saved
+                        conn.rollback()
+                        times.setdefault(f"{name}_{share}", []).append(taken)
+    finally:
+        checkin.write_property_rows = saved
+    return {k: statistics.median(v) for k, v in times.items()}
+
+
+def report_checkins(
+    t: dict[str, float], names: tuple[str, ...], prefix: str, size: int, shares: tuple[str, ...] = ()
+) -> None:
+    print(f"{prefix}vertices: {size}")
+    for name in names:
+        print(f"{prefix}fetch_in_version_{name}_s: {t[f'{name}_fetch']:.3f}")
+    for share in shares or ("1pct", "100pct"):
+        for name in names:
+            print(f"{prefix}checkin_{share}_{name}_s: {t[f'{name}_{share}']:.3f}")
+        base = t[f"bare_{share}"]
+        prop = {n: t[f"{n}_{share}"] - base for n in names if n != "bare"}
+        for name, value in prop.items():
+            print(f"{prefix}checkin_{share}_property_{name}_s: {value:.3f}")
+        for name in prop:
+            if name != "inchunks" and prop[name] > 0:
+                print(f"{prefix}checkin_{share}_property_inchunks_to_{name}: {prop['inchunks'] / prop[name]:.3f}")
+            if name != "inchunks":
+                print(
+                    f"{prefix}checkin_{share}_inchunks_to_{name}: {t[f'inchunks_{share}'] / t[f'{name}_{share}']:.3f}"
+                )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--side", type=int, default=1000)
@@ -138,11 +227,27 @@ def main() -> None:
     parser.add_argument(
         "--alter", action="store_true", help="time add/rename/drop property in place (and the round trip) instead"
     )
+    parser.add_argument("--checkin", action="store_true", help="time check-ins of property edits instead")
+    parser.add_argument("--shares", default="1pct,100pct", help=f"the edits of --checkin, among {sorted(EDITS)}")
     args = parser.parse_args()
     surface = grid_surface(args.side)
     n = surface.n_vertices
     with bench_database() as conn:
         conn.autocommit = False
+        if args.checkin:
+            names, shares = ("bare", "onrows", "inchunks"), tuple(args.shares.split(","))
+            report_checkins(checkins(conn, surface, args.repeat, names, "", shares), names, "", n, shares)
+            if args.face:
+                small = grid_surface(args.face_side)
+                names = ("bare", "onrows", "inchunks", "inchunksface")
+                t = checkins(conn, small, args.repeat, names, "small")
+                report_checkins(t, names, f"side{args.face_side}_", small.n_vertices)
+                for share in ("1pct", "100pct"):
+                    face = t[f"inchunksface_{share}"] - t[f"bare_{share}"]
+                    bulk = t[f"inchunks_{share}"] - t[f"bare_{share}"]
+                    if face > 0:
+                        print(f"side{args.face_side}_checkin_{share}_property_bulk_to_face: {bulk / face:.4f}")
+            return
         tgsis.create_feature_class(conn, "horizon", "SURFACE", cell_properties=[("porosity", "double precision")])
         if args.versioned:
             tgsis.enable_feature_versioning(conn)

@@ -15,12 +15,18 @@ trigger; these paths move whole chunks instead, as model 1's vertex chunks move
   after the face's checks (the role's INSERT on the face, locks, the
   encoding, new chunks only);
 * :func:`property_request` reads them in :func:`~tgsis.db._transfer.columns_out_all`'s
-  one query (:class:`~tgsis.db._chunk_transfer.PackedChunks`), decoded here.
+  one query (:class:`~tgsis.db._chunk_transfer.PackedChunks`), decoded here;
+* :func:`write_property_rows` writes an edit of one object's property rows (the
+  check-in by difference, the merges' written states), versioned or not: the
+  rows that go and the new and changed rows at once, sent by one binary COPY
+  and written by ``tgsis.write_property_rows``, each touched chunk rewritten
+  once (through the face, each row rewrote its chunk).
 
-Both are taken only where they give what the face gives: a class whose tables
-are not versioned (the versioned face is another engineer's work), and a role
-that may read the chunk table (download) or insert into the face (upload);
-otherwise the callers go through the face as before. Private to ``tgsis.db``.
+The upload and the download are taken only where they give what the face
+gives: a class whose tables are not versioned, and a role that may read the
+chunk table (download) or insert into the face (upload); otherwise the callers
+go through the face as before. The edit's write has the face's checks
+server-side (rights, version, locks) and serves every role the face serves. Private to ``tgsis.db``.
 """
 
 from __future__ import annotations
@@ -37,10 +43,12 @@ from psycopg import sql
 
 from tgsis._chunks import CHUNK_SIZE, ChunkColumns, encode, to_copy
 from tgsis.db._chunk_transfer import ChunkTable, ObjectRows, PackedChunks
+from tgsis.db._transfer import copy_in
 from tgsis.db.classes import FeatureClass
+from tgsis.db.copy import encode_rows
 from tgsis.errors import InvalidInputError
 
-__all__ = ["PropertyChunks", "property_chunks", "property_request", "upload_properties"]
+__all__ = ["PropertyChunks", "property_chunks", "property_request", "upload_properties", "write_property_rows"]
 
 Conn = psycopg.Connection[Any]
 
@@ -223,3 +231,69 @@ def _staged_name(layout: PropertyChunks) -> sql.Composed:
     """
     digest = hashlib.sha256(repr(layout.columns.properties).encode()).hexdigest()[:16]
     return sql.SQL("pg_temp.{}").format(sql.Identifier(f"tgsis_upload_{layout.oid}_{digest}"))
+
+
+def write_property_rows(
+    conn: Conn,
+    schema: str,
+    table: str,
+    geoid: int,
+    deleted: npt.ArrayLike,
+    columns: Sequence[tuple[str, npt.ArrayLike, str]],
+) -> int | None:
+    """Write an edit of object ``geoid``'s rows of the property table ``schema.table`` if it is stored in chunks.
+
+    The rows ``deleted`` go (or change: a row of ``columns`` replaces the row of its id) and the rows of
+    ``columns`` are written, in the caller's transaction and the session's version: one binary COPY into a
+    temporary table of the transaction, then ``tgsis.write_property_rows``, which makes the face's checks for
+    the whole set and rewrites each touched chunk once (``tgsis.write_chunk_rows``).
+
+    Parameters
+    ----------
+    schema, table : str
+        The class's property table (the face of ``tgsis.store_class_in_chunks``).
+    geoid : int
+    deleted : (d,) int
+        Ids whose rows go, or change (then also in ``columns``).
+    columns : sequence of (name, (n,) array, wire type)
+        ``_geoid`` (all ``geoid``), ``_idx`` and the properties, as :meth:`~tgsis.db._transfer.Storage.copy`
+        takes them.
+
+    Returns
+    -------
+    int or None
+        Chunks written; None when the table is not stored in chunks (nothing done: write its rows).
+    """
+    row = conn.execute(
+        "SELECT %s::text <> 'tgsis' AND tgsis.stored_in_chunks(%s, %s)", (schema, schema, table)
+    ).fetchone()
+    if row is None or not row[0]:
+        return None
+    gone = np.asarray(deleted, dtype=np.int64).reshape(-1)
+    count = len(np.asarray(columns[0][1])) if columns else 0
+    if not len(gone) and not count:
+        return 0
+    face = sql.Identifier(schema, table)
+    stage = sql.Identifier(f"tgsis_property_edit_{hashlib.sha256(f'{schema}.{table}'.encode()).hexdigest()[:16]}")
+    # made anew each time: a property added, renamed or dropped in the transaction changes the face's columns
+    conn.execute(sql.SQL("DROP TABLE IF EXISTS pg_temp.{}").format(stage))
+    conn.execute(sql.SQL("CREATE TEMP TABLE {} (LIKE {}) ON COMMIT DROP").format(stage, face))
+    names = [name for name, _, _ in columns]
+    if count:
+        copy_in(conn, sql.SQL("pg_temp.{}").format(stage), names, encode_rows([(v, w) for _, v, w in columns]))
+    fields = conn.execute(
+        "SELECT attname::text FROM pg_catalog.pg_attribute WHERE attrelid = to_regclass(%s) AND attnum > 0 "
+        "AND NOT attisdropped ORDER BY attnum",
+        (face.as_string(conn),),
+    ).fetchall()
+    rows = sql.SQL("(SELECT coalesce(array_agg(ROW({})::{}), '{{}}') FROM pg_temp.{} s)").format(
+        sql.SQL(", ").join(sql.SQL("s.{}").format(sql.Identifier(f)) for (f,) in fields), face, stage
+    )
+    written = conn.execute(
+        sql.SQL("SELECT tgsis.write_property_rows(format('%%I.%%I', %s::text, %s::text), %s, %s::bigint[], {})").format(
+            rows
+        ),
+        (schema, table, int(geoid), gone.tolist()),
+    ).fetchone()
+    conn.execute(sql.SQL("DROP TABLE pg_temp.{}").format(stage))
+    return int(written[0]) if written is not None and written[0] is not None else 0

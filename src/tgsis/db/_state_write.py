@@ -28,6 +28,7 @@ from psycopg import sql
 
 from tgsis.db._chunk_write import stored_in_chunks, swap_object_rows, write_object_rows
 from tgsis.db._cube import box_corners, cube_name
+from tgsis.db._property_chunks import write_property_rows
 from tgsis.db._static import SIMPLEX, copy_extra_rows, part_rows
 from tgsis.db._transfer import Storage
 from tgsis.db.classes import FeatureClass, stores_part_column
@@ -223,15 +224,14 @@ def _write_properties(
             return result
 
         gone, fresh = _difference(old_ids, new_ids, same)
-        deleted += delete_rows(conn, fc.schema, protable, "_geoid", geoid, "_idx", gone)
         # an id whose values are all NaN has no row in the state it comes from (the read gives a missing row
         # NaN): it gets none, rather than a row of NaN or a refusal for an integer column
         fresh = fresh[~_without_row(news, fresh)]
+        columns: list[tuple[str, npt.ArrayLike, str]] = [
+            ("_geoid", np.full(len(fresh), geoid, dtype=np.int64), "int8"),
+            ("_idx", new_ids[fresh], "int8"),
+        ]
         if len(fresh):
-            columns: list[tuple[str, npt.ArrayLike, str]] = [
-                ("_geoid", np.full(len(fresh), geoid, dtype=np.int64), "int8"),
-                ("_idx", new_ids[fresh], "int8"),
-            ]
             for p, values in zip(props, news, strict=True):
                 wire = SQL_TYPES[p.type]
                 chosen = values[fresh]
@@ -249,6 +249,15 @@ def _write_properties(
                 if wire not in ("float4", "float8") and chosen.dtype.kind == "f":
                     chosen = chosen.astype(np.int64)
                 columns.append((p.name, chosen, array_wire(wire, p.size)))
+        if not len(gone) and not len(fresh):
+            continue
+        storage.check(fc.schema, protable)
+        # stored in chunks: the whole edit at once, each touched chunk rewritten once (not a rewrite per row)
+        if write_property_rows(conn, fc.schema, protable, geoid, gone, columns if len(fresh) else []) is not None:
+            deleted, inserted = deleted + len(gone), inserted + len(fresh)
+            continue
+        deleted += delete_rows(conn, fc.schema, protable, "_geoid", geoid, "_idx", gone)
+        if len(fresh):
             storage.copy(conn, fc.schema, protable, columns)
             inserted += len(fresh)
     return deleted, inserted

@@ -46,6 +46,7 @@ from tgsis.arguments import checked
 from tgsis.compare import MeshDiff, MeshIndex, compare_meshes
 from tgsis.db._chunk_write import next_id as next_chunk_id
 from tgsis.db._chunk_write import stored_in_chunks
+from tgsis.db._property_chunks import write_property_rows
 from tgsis.db._settings import read_version_settings, restore_version_settings
 from tgsis.db._state_write import (
     PART_PROPERTY,
@@ -396,26 +397,22 @@ def _write_diff(
             changed |= ~_same_values(old_values[p.name][element_map[kept]], cell_values[p.name][kept])
         rewrite = np.concatenate([kept[changed], np.flatnonzero(element_map < 0)])
         changes += int(changed.sum())
-        deleted += delete_rows(
-            conn,
-            fc.schema,
-            protable,
-            "_geoid",
-            geoid,
-            "_idx",
-            np.concatenate([old_ids[removed], new_ids[kept[changed]]]),
-        )
+        going = np.concatenate([old_ids[removed], new_ids[kept[changed]]])
+        columns: list[tuple[str, npt.ArrayLike, str]] = [
+            ("_geoid", np.full(len(rewrite), geoid, dtype=np.int64), "int8"),
+            ("_idx", new_ids[rewrite], "int8"),
+            *((p.name, cell_values[p.name][rewrite], array_wire(SQL_TYPES[p.type], p.size)) for p in props),
+        ]
+        if not len(going) and not len(rewrite):
+            continue
+        storage.check(fc.schema, protable)
+        # stored in chunks: the whole edit at once, each touched chunk rewritten once (not a rewrite per row)
+        if write_property_rows(conn, fc.schema, protable, geoid, going, columns if len(rewrite) else []) is not None:
+            deleted, inserted = deleted + len(going), inserted + len(rewrite)
+            continue
+        deleted += delete_rows(conn, fc.schema, protable, "_geoid", geoid, "_idx", going)
         if len(rewrite):
-            storage.copy(
-                conn,
-                fc.schema,
-                protable,
-                [
-                    ("_geoid", np.full(len(rewrite), geoid, dtype=np.int64), "int8"),
-                    ("_idx", new_ids[rewrite], "int8"),
-                    *((p.name, cell_values[p.name][rewrite], array_wire(SQL_TYPES[p.type], p.size)) for p in props),
-                ],
-            )
+            storage.copy(conn, fc.schema, protable, columns)
             inserted += len(rewrite)
 
     written_v = np.concatenate([moved, added_v])
