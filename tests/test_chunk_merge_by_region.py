@@ -93,9 +93,19 @@ def switch_to_chunks(conn: Conn) -> None:
     )
 
 
-def version_state(conn: Conn, version: str, geoid: int) -> tuple[list[tuple[Any, ...]], list[tuple[Any, ...]]]:
-    """The version's vertices (coordinates as bits) and triangles as its views show them."""
+def version_state(conn: Conn, version: str, geoid: int) -> tuple[list[tuple[Any, ...]], ...]:
+    """The version's vertices (coordinates as bits), triangles and geometry row (counts, box corners as bits:
+    tgsis.merge_geometry_row reads the chunk arrays on chunks, the rows on rows) as its views show them."""
     with tgsis.in_version(conn, version):
+        geometry = [
+            (int(r[0]), int(r[1]), *(None if c is None else struct.pack(">d", float(c)) for c in r[2:]))
+            for r in conn.execute(
+                "SELECT nvrtx, ncell, cube_ll_coord(bbox, 1), cube_ll_coord(bbox, 2), cube_ll_coord(bbox, 3),"
+                " cube_ur_coord(bbox, 1), cube_ur_coord(bbox, 2), cube_ur_coord(bbox, 3)"
+                " FROM tgsis.geometry WHERE geoid = %s",
+                (geoid,),
+            )
+        ]
         vertices = [
             (int(r[0]), *(struct.pack(">d", float(c)) for c in r[1:]))
             for r in conn.execute("SELECT vrtxid, x, y, z FROM tgsis.vrtx WHERE geoid = %s ORDER BY 1", (geoid,))
@@ -107,7 +117,7 @@ def version_state(conn: Conn, version: str, geoid: int) -> tuple[list[tuple[Any,
             )
         ]
     conn.rollback()
-    return vertices, cells
+    return vertices, cells, geometry
 
 
 def by_region(conn: Conn, geoid: int) -> tuple[Any, ...]:

@@ -761,3 +761,48 @@ def test_the_sql_merge_by_region_writes_property_chunks_as_rows(conn: Conn) -> N
     assert views["inchunks"] == views["onrows"]
     final = {r[1]: r[2:] for r in _twin_rows(conn, "inchunks")}
     assert final[10][0] == final[1100][0] == struct.pack(">d", -0.0) and final[1300][1] == 77
+
+
+def test_the_sql_merge_by_region_writes_each_touched_property_chunk_once(conn: Conn) -> None:
+    """psql's merge by region brings 300 property rows of the parent into the version in one bulk write
+    (tgsis.write_property_rows: each touched chunk written once), not one chunk rewrite per row through the
+    face: the chunk table's tuple writes in the merge's transaction are a few, not hundreds; every view still
+    equals the twin class on rows."""
+    for name in TWINS:
+        tgsis.create_feature_class(
+            conn, name, "SURFACE", cell_properties=[("porosity", "double precision"), ("facies", "integer")]
+        )
+    tgsis.enable_feature_versioning(conn)
+    geoids = {name: F.insert_feature(conn, name, _surface()) for name in TWINS}
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    conn.execute("SELECT tgsis.store_class_in_chunks('inchunks')")
+    conn.commit()
+    _each(conn, "e1", "UPDATE {table} SET porosity = 0.5 WHERE _geoid = %(g)s AND _idx = 1500", geoids)
+    _each(conn, "DEFAULT", "UPDATE {table} SET facies = 7 WHERE _geoid = %(g)s AND _idx < 300", geoids)
+    conn.execute("SELECT FROM tgsis.find_conflicts('e1')")
+    conn.commit()
+    written = {}
+    for name in TWINS:
+        conn.execute("SET TRANSACTION ISOLATION LEVEL READ COMMITTED")
+        before = conn.execute(
+            "SELECT coalesce(sum(n_tup_ins + n_tup_upd), 0) FROM pg_stat_xact_user_tables WHERE relname = %s",
+            (f"{name}_cellpros_chunk",),
+        ).fetchone()
+        row = conn.execute("SELECT tgsis.merge_mesh_by_region('e1', 'merge', %s)", (geoids[name],)).fetchone()
+        after = conn.execute(
+            "SELECT coalesce(sum(n_tup_ins + n_tup_upd), 0) FROM pg_stat_xact_user_tables WHERE relname = %s",
+            (f"{name}_cellpros_chunk",),
+        ).fetchone()
+        conn.commit()
+        assert row is not None and row[0] is not None and before is not None and after is not None, name
+        written[name] = (row[0], after[0] - before[0])
+    # the rows written counted alike (300 closed, 300 written); through the face each of them was a chunk write
+    assert written["inchunks"][0] == written["onrows"][0] >= 600
+    assert 0 < written["inchunks"][1] <= 4, written
+    views = _twin_views(conn)
+    assert views["inchunks"] == views["onrows"]
+    _look(conn, "e1", None)
+    final = {r[1]: r[2:] for r in _twin_rows(conn, "inchunks")}  # the version: both sides' edits
+    conn.execute("SELECT tgsis.goto_version('DEFAULT', true)")
+    assert all(final[i][1] == 7 for i in range(300)) and final[1500][0] == struct.pack(">d", 0.5)

@@ -108,6 +108,7 @@ DECLARE
     v_vals     text;
     v_casts    text;
     v_width    integer;
+    v_rowexpr  text;
     v_rows     text[];
     v_pt       tgsis.versioned_tables;
     v_t        record;
@@ -400,18 +401,33 @@ BEGIN
                     v_refused, lower(v_t.alignment), v_why
                 USING ERRCODE = 'TG302', HINT = v_hint;
         END IF;
+        IF tgsis.stored_in_chunks(v_pt.schemaname, v_pt.tablename) THEN
+            -- a property table stored in chunks (tgsis.store_class_in_chunks): the rows that go and the rows
+            -- written in one call of the chunk layer's bulk writer (tgsis.write_property_rows, named at run
+            -- time: a layer above this one), each touched chunk rewritten once in the working revision with
+            -- the face's checks for the calling role (through the face, each row's INSERT and DELETE rewrote
+            -- its chunk); the rows written counted as through the face (gone, then written)
+            SELECT string_agg(CASE a.attname WHEN '_geoid' THEN '$1[1]::bigint'
+                                             WHEN '_idx' THEN format('$1[2 + (g.i - 1) * %s]::bigint', v_width)
+                                             ELSE format('$1[2 + (g.i - 1) * %s + %s]::%s', v_width,
+                                                         (SELECT count(*) FROM pg_catalog.pg_attribute b
+                                                           WHERE b.attrelid = a.attrelid AND b.attnum > 0 AND NOT b.attisdropped
+                                                             AND b.attname NOT IN ('_geoid', '_idx') AND b.attnum <= a.attnum),
+                                                         format_type(a.atttypid, a.atttypmod)) END,
+                              ', ' ORDER BY a.attnum)
+              INTO v_rowexpr
+              FROM pg_catalog.pg_attribute a
+             WHERE a.attrelid = format('%I.%I', v_t.schemaname, v_t.tablename)::regclass AND a.attnum > 0 AND NOT a.attisdropped;
+            EXECUTE format('SELECT tgsis.%I($2, $1[1]::bigint, $3,
+                                   coalesce((SELECT array_agg(ROW(%s)::%s ORDER BY g.i)
+                                               FROM generate_series(1, (cardinality($1) - 1) / %s) AS g(i)), ''{}''))',
+                           'write_property_rows', v_rowexpr, format('%I.%I', v_t.schemaname, v_t.tablename), v_width)
+              USING ARRAY[p_geoid::text] || ARRAY(SELECT unnest(v_rows)), format('%I.%I', v_t.schemaname, v_t.tablename), v_t.gone;
+            v_written := v_written + cardinality(v_t.gone) + coalesce(array_length(v_rows, 1), 0);
+            CONTINUE;
+        END IF;
         v_written := v_written + tgsis.delete_object_rows(v_t.schemaname, v_t.tablename, '_geoid', ARRAY[p_geoid], '_idx', v_t.gone);
-        IF cardinality(v_rows) > 0 AND tgsis.stored_in_chunks(v_pt.schemaname, v_pt.tablename) THEN
-            -- a property table stored in chunks (tgsis.store_class_in_chunks): through its face, whose trigger
-            -- rewrites the touched chunks in the working revision with the caller's rights
-            EXECUTE format('INSERT INTO %I.%I (_geoid, _idx, %s)
-                            SELECT $1[1]::bigint, $1[2 + (g.i - 1) * %s]::bigint, %s
-                              FROM generate_series(1, (cardinality($1) - 1) / %s) AS g(i)',
-                           v_pt.schemaname, v_pt.tablename, v_cols, v_width, v_casts, v_width)
-              USING ARRAY[p_geoid::text] || ARRAY(SELECT unnest(v_rows));
-            GET DIAGNOSTICS v_count = ROW_COUNT;
-            v_written := v_written + v_count;
-        ELSIF cardinality(v_rows) > 0 THEN
+        IF cardinality(v_rows) > 0 THEN
             SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(v_pt, true, format(
                 'INSERT INTO %I.%I (_geoid, _idx, %s, revision)
                  SELECT $1[1]::bigint, $1[2 + (g.i - 1) * %s]::bigint, %s, $4
