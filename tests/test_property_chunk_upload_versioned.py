@@ -196,3 +196,40 @@ def test_two_sessions_upload_into_one_version_and_both_are_kept(db_dsn: str, con
         assert _bits(F.fetch_feature(conn, "inchunks", a).mesh) == _bits(_surface(shift=1.0))
         assert _bits(F.fetch_feature(conn, "inchunks", b).mesh) == _bits(_surface(shift=2.0))
         conn.commit()
+
+
+def test_a_collection_in_a_version_members_missing_properties_are_null(conn: Conn) -> None:
+    """A collection uploaded in e1 whose second member lacks facies: its chunks hold NULL facies (no holes), each
+    member's values those of the twin on rows, read back from the chunks."""
+    for name in ("crows", "cchunks"):
+        tgsis.create_feature_class(
+            conn, name, "GEOMETRYCOLLECTION", cell_properties=[("porosity", "double precision"), ("facies", "integer")]
+        )
+    tgsis.enable_feature_versioning(conn)
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    conn.execute("SELECT tgsis.store_class_in_chunks('cchunks')")
+    conn.commit()
+    full = _surface()
+    members = [
+        full,
+        Surface(full.vertices, full.cells, vertex_properties={"porosity": full.vertex_properties["porosity"]}),
+    ]
+    seen = {}
+    with tgsis.in_version(conn, "e1"):
+        for name in ("crows", "cchunks"):
+            geoid = F.insert_feature(conn, name, tgsis.GeometryCollection(members))
+            conn.commit()
+            ids = conn.execute("SELECT geoids FROM tgsis.geometry WHERE geoid = %s", (geoid,)).fetchone()
+            assert ids is not None
+            seen[name] = [[r[1:] for r in _rows(conn, name, g)] for g in ids[0]]
+            back = F.fetch_feature(conn, name, geoid).mesh
+            assert isinstance(back, tgsis.GeometryCollection)
+            assert _bits(back.members[0]) == _bits(full)
+            assert (
+                back.members[1].vertex_properties["porosity"].tobytes() == full.vertex_properties["porosity"].tobytes()
+            )
+            assert "facies" not in back.members[1].vertex_properties
+            conn.commit()
+    assert seen["cchunks"] == seen["crows"]
+    assert all(r[1] is None for r in seen["cchunks"][1]) and len(seen["cchunks"][1]) == 3025
