@@ -23,9 +23,12 @@ trigger; these paths move whole chunks instead, as model 1's vertex chunks move
   once (through the face, each row rewrote its chunk).
 
 The upload and the download are taken only where they give what the face
-gives: a class whose tables are not versioned, and a role that may read the
-chunk table (download) or insert into the face (upload); otherwise the callers
-go through the face as before. The edit's write has the face's checks
+gives: a role that may read the chunk table (download) or insert into the face
+(upload); otherwise the callers go through the face as before. A versioned
+class's download reads the chunk versions the session sees (the face's
+visibility test); its upload writes each new object by
+:func:`write_property_rows` (revision, rights and locks of the face checked on
+the server), not by :func:`upload_properties` (chunks of revision 0 only). The edit's write has the face's checks
 server-side (rights, version, locks) and serves every role the face serves. Private to ``tgsis.db``.
 """
 
@@ -86,8 +89,10 @@ class PropertyChunks(ChunkTable):
 def property_chunks(conn: Conn, fc: FeatureClass, table: str) -> PropertyChunks | None:
     """The chunk layout of the class's property table ``table`` if its bulk paths are open, else None.
 
-    None: the table is rows (or anything but the face of ``tgsis.store_class_in_chunks``), it is
-    versioned, or its chunk table has a column this client does not encode. Read from the catalog.
+    None: the table is rows (or anything but the face of ``tgsis.store_class_in_chunks``), or its chunk
+    table has a column this client does not encode. ``versioned``: the table is versioned (a download reads
+    the chunk versions the session sees, as the face; an upload goes by :func:`write_property_rows`, not
+    :func:`upload_properties`). Read from the catalog.
     """
     row = conn.execute(
         "SELECT c.oid, f.relkind::text, has_table_privilege(c.oid, 'SELECT'), "
@@ -98,9 +103,9 @@ def property_chunks(conn: Conn, fc: FeatureClass, table: str) -> PropertyChunks 
         "WHERE n.nspname = %s AND c.relname = %s AND f.oid = to_regclass(format('%%I.%%I', %s::text, %s::text))",
         (fc.schema, table, fc.schema, table, fc.schema, f"{table}_chunk", fc.schema, table),
     ).fetchone()
-    if row is None or row[1] != "v" or row[4]:
+    if row is None or row[1] != "v":
         return None
-    oid, _, readable, insertable, _, name = row
+    oid, _, readable, insertable, versioned, name = row
     attributes = conn.execute(
         "SELECT attname::text, format_type(atttypid, atttypmod) FROM pg_catalog.pg_attribute "
         "WHERE attrelid = %s AND attnum > 0 AND NOT attisdropped ORDER BY attnum",
@@ -117,7 +122,9 @@ def property_chunks(conn: Conn, fc: FeatureClass, table: str) -> PropertyChunks 
         return None  # (a layout this client does not know: the face still reads and writes it)
     kinds = tuple((n, _KINDS[t]) for n, t in arrays)
     columns = ChunkColumns(tuple(n for n, _ in arrays), properties=kinds, key="_geoid")
-    return PropertyChunks(table, columns, False, bool(readable), fc.schema, bool(insertable), str(name), int(oid))
+    return PropertyChunks(
+        table, columns, bool(versioned), bool(readable), fc.schema, bool(insertable), str(name), int(oid)
+    )
 
 
 def property_request(
@@ -168,6 +175,8 @@ def upload_properties(
     psycopg.errors.InsufficientPrivilege
         The role may not INSERT into the face.
     """
+    if layout.versioned:
+        raise InvalidInputError(f"{layout.name} is versioned: write its new objects with write_property_rows")
     spec = layout.columns
     objects = []
     for geoid, n, given in zip(geoids, counts, values, strict=True):

@@ -18,7 +18,7 @@ from psycopg import sql
 
 from tgsis.arguments import no_nul
 from tgsis.db._chunk_transfer import ObjectRows, chunked_tables, rows_request, upload_chunks
-from tgsis.db._property_chunks import property_chunks, property_request, upload_properties
+from tgsis.db._property_chunks import property_chunks, property_request, upload_properties, write_property_rows
 from tgsis.db._transfer import (
     Packed,
     PartRequest,
@@ -226,6 +226,25 @@ def copy_meshes(
         for i, values in enumerate(cell_values):
             groups.setdefault(tuple(p.name for p in props if p.name in values), []).append(i)
         layout = property_chunks(conn, fc, protable)
+        if layout is not None and layout.insertable and layout.versioned:
+            # versioned, in chunks: each new object's rows in one call, its chunks written once in the
+            # working revision (the face's checks on the server), not one chunk rewrite per row
+            for names, group in groups.items():
+                for i in group if names else ():
+                    n = meshes[i].n_vertices if alignment == "VERTEX" else meshes[i].n_cells
+                    write_property_rows(
+                        conn,
+                        fc.schema,
+                        protable,
+                        geoids[i],
+                        np.zeros(0, dtype=np.int64),
+                        [
+                            ("_geoid", np.full(n, geoids[i], dtype=np.int64), "int8"),
+                            ("_idx", np.arange(n, dtype=np.int64), "int8"),
+                            *((p.name, cell_values[i][p.name], p.wire) for p in props if p.name in names),
+                        ],
+                    )
+            continue
         if layout is not None and layout.insertable:  # stored in chunks: whole chunks, one COPY for every mesh
             members = [i for names, group in groups.items() if names for i in group]
             upload_properties(
