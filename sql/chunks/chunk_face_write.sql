@@ -44,6 +44,9 @@
 --     today's view writes row by row (one group's revision for both was
 --     TG300). INSERT, DELETE and key changes are written per
 --     row through pg_temp.tgsis_face_now_<view oid>.
+-- A chunk's lock is named by its key as text (a double key, model 2's times,
+-- printed exactly whatever the session's extra_float_digits: pinned here, so
+-- that two sessions name one chunk alike).
 -- The temporary tables are refused (42501) when the session made them itself
 -- (another owner): rows written here come only from the face's own rows.
 -- SECURITY DEFINER: it writes the chunk table as its owner.
@@ -53,6 +56,7 @@ LANGUAGE plpgsql
 VOLATILE
 SECURITY DEFINER
 SET search_path = pg_catalog, pg_temp
+SET extra_float_digits = 1  -- the chunks' locks name a double key (times) as text: every session alike, exactly
 AS $$
 DECLARE
     v_table     text := TG_ARGV[0];
