@@ -68,10 +68,19 @@ BEGIN
                        row_number() OVER (ORDER BY coalesce(array_position(p_keys, a.attname::text), v_k + 1), a.attnum) AS o
                   FROM pg_catalog.pg_attribute a
                  WHERE a.attrelid = v_rel AND a.attnum > 0 AND NOT a.attisdropped AND a.attname <> p_okey) AS c;
+        -- (one table of the session's for every object and merge: a table made and dropped per object keeps a lock
+        -- until the transaction ends, and a merge of many objects would run out of the shared lock table)
         v_tab := format('pg_temp.%I', 'tgsis_merge_rows_' || p_table.tablename);
-        EXECUTE format('DROP TABLE IF EXISTS %s', v_tab);
-        EXECUTE format('SELECT tgsis.%I($1)::text', 'row_shape') INTO v_shape USING p_table.tablename;
-        EXECUTE format('CREATE TEMP TABLE %s ON COMMIT DROP AS SELECT *, false AS _delete FROM %s WITH NO DATA', v_tab, v_shape);
+        IF to_regclass(v_tab) IS NULL THEN
+            EXECUTE format('SELECT tgsis.%I($1)::text', 'row_shape') INTO v_shape USING p_table.tablename;
+            EXECUTE format('CREATE TEMP TABLE %s AS SELECT *, false AS _delete FROM %s WITH NO DATA', v_tab, v_shape);
+        ELSIF (SELECT c.relowner FROM pg_class c WHERE c.oid = to_regclass(v_tab))
+              <> (SELECT r.oid FROM pg_roles r WHERE r.rolname = current_user) THEN
+            RAISE EXCEPTION 'the session''s table % was not made by tgsis.merge_write_keyed_rows', v_tab
+                USING ERRCODE = 'insufficient_privilege', HINT = 'drop the temporary table and merge again';
+        ELSE
+            EXECUTE format('TRUNCATE %s', v_tab);
+        END IF;
         IF cardinality(p_fresh) > 0 THEN
             EXECUTE format('INSERT INTO %s (%I, %s, _delete) SELECT $1[1]::bigint, %s, false '
                            'FROM generate_series(0, (cardinality($1) - 1) / %s - 1) AS g(i)',
@@ -93,7 +102,7 @@ BEGIN
         IF v_count > 0 THEN
             PERFORM tgsis.note_changed_objects(p_table.schemaname, p_table.tablename, p_revision, ARRAY[p_geoid::text]);
         END IF;
-        EXECUTE format('DROP TABLE %s', v_tab);
+        EXECUTE format('TRUNCATE %s', v_tab);
         RETURN v_written;
     END IF;
     IF cardinality(p_gone) > 0 THEN
