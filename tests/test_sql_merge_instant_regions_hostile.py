@@ -378,7 +378,9 @@ def test_the_one_ring_of_an_instant_is_found_through_the_triangles_vertex_brin(c
     with p_times, through tgsis.cells_on_vertices_sql) reads a few page ranges of that instant's triangles, not
     all of them (it read every triangle of the instant by the primary key: 2 (n-1)^2 and more)."""
     if conn.execute("SELECT tgsis.stored_in_chunks('times_trgl')").fetchone() == (True,):
-        pytest.skip("stored in chunks, the triangles have no vertex BRIN: their chunks' [vbase, vtop] bounds (docs/storage.md)")
+        pytest.skip(
+            "stored in chunks, the triangles have no vertex BRIN: their chunks' [vbase, vtop] bounds (docs/storage.md)"
+        )
     n = 200
     _grid_edited(conn, n, count=2, at=2.0)
     names = [
