@@ -50,7 +50,7 @@ def _switch(conn: Conn) -> None:
     """Store every model table registered for chunks in chunks (those the template did not switch), committed."""
     conn.execute(
         "SELECT tgsis.store_in_chunks(tablename) FROM tgsis.model_tables"
-        " WHERE chunkcolumn IS NOT NULL AND NOT tgsis.stored_in_chunks(tablename) ORDER BY model, iudorder, tablename"
+        " WHERE chunkdefault AND NOT tgsis.stored_in_chunks(tablename) ORDER BY model, iudorder, tablename"
     )
     conn.commit()
     assert conn.execute("SELECT tgsis.stored_in_chunks('vrtx') AND tgsis.stored_in_chunks('trgl')").fetchone() == (

@@ -28,7 +28,7 @@ def _switch(conn: Conn) -> None:
     """Store every table registered for chunks in chunks (a no-op for those the template switched)."""
     conn.execute(
         "SELECT tgsis.store_in_chunks(tablename) FROM tgsis.model_tables"
-        " WHERE chunkcolumn IS NOT NULL AND NOT tgsis.stored_in_chunks(tablename) ORDER BY model, iudorder, tablename"
+        " WHERE chunkdefault AND NOT tgsis.stored_in_chunks(tablename) ORDER BY model, iudorder, tablename"
     )
     conn.commit()
     assert conn.execute("SELECT tgsis.stored_in_chunks('vrtx') AND tgsis.stored_in_chunks('trgl')").fetchone() == (

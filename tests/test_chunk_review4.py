@@ -44,7 +44,7 @@ def _grid(side: int, seed: int, name: str) -> tgsis.Surface:
 def _switch(conn: Conn) -> None:
     conn.execute(
         "SELECT tgsis.store_in_chunks(tablename) FROM tgsis.model_tables"
-        " WHERE chunkcolumn IS NOT NULL AND NOT tgsis.stored_in_chunks(tablename) ORDER BY model, iudorder, tablename"
+        " WHERE chunkdefault AND NOT tgsis.stored_in_chunks(tablename) ORDER BY model, iudorder, tablename"
     )
     conn.commit()
 

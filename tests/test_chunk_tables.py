@@ -122,11 +122,15 @@ def test_model1_tables_are_registered_for_chunks(conn: Conn) -> None:
         ("trgl", "trglid", ["vrtxid1", "vrtxid2", "vrtxid3"], 1024),
         ("vrtx", "vrtxid", [], 1024),
     ]
-    # no other model is chunked yet; the columns say what they are
+    # model 2's time tables are registered for chunks, not stored in them by default; the columns say what they are
     assert conn.execute(
-        "SELECT count(*) FROM tgsis.model_tables WHERE model <> 1 AND chunkcolumn IS NOT NULL"
-    ).fetchone() == (0,)
-    for column in ("chunkcolumn", "chunkrefs", "chunksize"):
+        "SELECT array_agg(tablename || ':' || chunkcolumn || ':' || chunkdefault ORDER BY tablename) FROM tgsis.model_tables"
+        " WHERE model <> 1 AND chunkcolumn IS NOT NULL"
+    ).fetchone() == (["times_trgl:trglid:false", "times_vrtx:vrtxid:false"],)
+    assert conn.execute(
+        "SELECT bool_and(chunkdefault = (model = 1)) FROM tgsis.model_tables WHERE chunkcolumn IS NOT NULL"
+    ).fetchone() == (True,)
+    for column in ("chunkcolumn", "chunkrefs", "chunksize", "chunkdefault"):
         assert conn.execute(
             "SELECT col_description('tgsis.model_tables'::regclass, "
             "(SELECT attnum FROM pg_attribute WHERE attrelid = 'tgsis.model_tables'::regclass "

@@ -104,6 +104,7 @@ _NAMED_IN_DOCS = frozenset(
         "goto_version",
         "grant_version",
         "has_version_privilege",
+        "insert_chunk_rows",
         "insert_postgis_feature",
         "instant_at",
         "instant_periods",

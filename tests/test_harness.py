@@ -91,7 +91,7 @@ def test_a_run_without_server_fails_instead_of_skipping(tmp_path: Path) -> None:
 def _model1_storage(conn: psycopg.Connection[Any]) -> set[str]:
     """The storages of model 1's chunk tables in a database (one of them unless a test switched some)."""
     rows = conn.execute(
-        "SELECT tgsis.stored_in_chunks(tablename) FROM tgsis.model_tables WHERE chunkcolumn IS NOT NULL"
+        "SELECT tgsis.stored_in_chunks(tablename) FROM tgsis.model_tables WHERE chunkdefault"
     ).fetchall()
     assert len(rows) == 5
     return {"chunks" if row[0] else "rows" for row in rows}

@@ -35,7 +35,7 @@ Conn = psycopg.Connection[Any]
 
 SIDE = 40  # 1,600 vertices (chunks 0 and 1), 3,042 triangles (chunks 0 to 2)
 CHUNKED = (
-    "SELECT tgsis.store_in_chunks(tablename) FROM tgsis.model_tables WHERE chunkcolumn IS NOT NULL"
+    "SELECT tgsis.store_in_chunks(tablename) FROM tgsis.model_tables WHERE chunkdefault"
     " ORDER BY model, iudorder, tablename"
 )
 MIDDLE = [10 * SIDE + 10, 10 * SIDE + 11, 11 * SIDE + 10]

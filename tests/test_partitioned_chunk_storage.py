@@ -41,7 +41,7 @@ def chunked(db_dsn: str) -> None:
     with psycopg.connect(db_dsn) as conn:
         conn.execute(
             "SELECT tgsis.store_in_chunks(t.tablename) FROM tgsis.model_tables t "
-            "WHERE t.chunkcolumn IS NOT NULL AND NOT tgsis.stored_in_chunks(t.tablename) ORDER BY t.tablename"
+            "WHERE t.chunkdefault AND NOT tgsis.stored_in_chunks(t.tablename) ORDER BY t.tablename"
         )
 
 

@@ -378,9 +378,7 @@ def test_switching_partitioned_rows_to_chunks_keeps_the_partitions_and_every_ver
         return views
 
     before = seen()
-    chunked = [
-        r[0] for r in conn.execute("SELECT tablename FROM tgsis.model_tables WHERE chunkcolumn IS NOT NULL ORDER BY 1")
-    ]
+    chunked = [r[0] for r in conn.execute("SELECT tablename FROM tgsis.model_tables WHERE chunkdefault ORDER BY 1")]
     for table in chunked:  # what the upgrade does (the storage switch), on partitioned row storage
         conn.execute("SELECT tgsis.store_in_chunks(%s)", (table,))
     conn.commit()

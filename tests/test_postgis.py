@@ -839,7 +839,7 @@ def _store_in_chunks(conn: Conn) -> None:
     """The storage switch of model 1, where the template stores rows (TGSIS_TEST_STORAGE=rows) or after versioning."""
     conn.execute(
         "SELECT tgsis.store_in_chunks(tablename) FROM tgsis.model_tables"
-        " WHERE chunkcolumn IS NOT NULL AND NOT tgsis.stored_in_chunks(tablename) ORDER BY model, iudorder, tablename"
+        " WHERE chunkdefault AND NOT tgsis.stored_in_chunks(tablename) ORDER BY model, iudorder, tablename"
     )
 
 

@@ -212,7 +212,10 @@ def test_new_vertices_with_ids_far_from_0_to_n_merge_as_in_python(conn: Conn, se
     move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
     move(conn, "DEFAULT", series, 2.0, SOUTH, PARENT_SHIFT)
     big = 2**53 + 1
-    for version, ids, dx in (("e1", (-7, big), 0.25), ("DEFAULT", (big,), -0.5)):
+    # (a negative id cannot be stored in chunks, by design: docs/storage.md; the time tables may be there)
+    chunked = conn.execute("SELECT tgsis.stored_in_chunks('times_vrtx')").fetchone() == (True,)
+    conn.rollback()
+    for version, ids, dx in (("e1", (big,) if chunked else (-7, big), 0.25), ("DEFAULT", (big,), -0.5)):
         for vid in ids:
             _sql(
                 conn,
@@ -225,8 +228,8 @@ def test_new_vertices_with_ids_far_from_0_to_n_merge_as_in_python(conn: Conn, se
     _sql(
         conn,
         "e1",
-        "INSERT INTO tgsis.times_trgl (geoid, times, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, 2, 9000, 5, -7, %s)",
-        (series, big),
+        "INSERT INTO tgsis.times_trgl (geoid, times, trglid, vrtxid1, vrtxid2, vrtxid3) VALUES (%s, 2, 9000, 5, %s, %s)",
+        (series, 6 if chunked else -7, big),
     )
     assert_same_regions(conn, "e1", series)
     assert_same_merge(conn, "e1")
@@ -374,6 +377,10 @@ def test_the_one_ring_of_an_instant_is_found_through_the_triangles_vertex_brin(c
     cell tables have one: the region engine's one-ring of a one-vertex edit at an instant (tgsis.mesh_merge_work
     with p_times, through tgsis.cells_on_vertices_sql) reads a few page ranges of that instant's triangles, not
     all of them (it read every triangle of the instant by the primary key: 2 (n-1)^2 and more)."""
+    if conn.execute("SELECT tgsis.stored_in_chunks('times_trgl')").fetchone() == (True,):
+        pytest.skip(
+            "stored in chunks, the triangles have no vertex BRIN: their chunks' [vbase, vtop] bounds (docs/storage.md)"
+        )
     n = 200
     _grid_edited(conn, n, count=2, at=2.0)
     names = [

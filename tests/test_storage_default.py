@@ -36,7 +36,7 @@ def _storages(conn: Conn) -> dict[str, bool]:
         str(name): bool(chunked)
         for name, chunked in conn.execute(
             "SELECT tablename, tgsis.stored_in_chunks(tablename) FROM tgsis.model_tables"
-            " WHERE chunkcolumn IS NOT NULL ORDER BY tablename"
+            " WHERE chunkdefault ORDER BY tablename"
         ).fetchall()
     }
 
@@ -201,7 +201,7 @@ def test_switched_then_versioned_is_versioned_then_switched(
     while versioned (an upgraded database's): the face's and decoded view's comments do not depend on when."""
     conn.execute(_USE)
     conn.execute(
-        "SELECT tgsis.store_in_chunks(tablename) FROM tgsis.model_tables WHERE chunkcolumn IS NOT NULL"
+        "SELECT tgsis.store_in_chunks(tablename) FROM tgsis.model_tables WHERE chunkdefault"
         " ORDER BY model, iudorder, tablename"
     )
     conn.commit()

@@ -11,7 +11,8 @@
 -- A model table or a class's property table stored in chunks
 -- (tgsis.stored_in_chunks(schema, table)) is hashed per chunk, not per row (docs/storage.md, "What each bulk path does on chunks"):
 -- each chunk version the session sees hashes as the first 64 bits of the md5
--- of its chunk number and the send form of every other column (holes, vbase,
+-- of its chunk number and the send form of every other column (a time key
+-- such as model 2's times, holes, vbase,
 -- the arrays: the doubles bit for bit, so -0.0 differs from 0.0 there where
 -- the row hash takes them as equal), and the count is of chunks. The
 -- encoding of a content is unique (the contract: arrays end on a present
@@ -49,7 +50,9 @@ BEGIN
     IF tgsis.stored_in_chunks(p_schema, p_table) THEN
         -- the chunk table's own columns, after its key (NULL: a byte an array's send form never starts with)
         SELECT string_agg(format('coalesce(%s(r.%I), ''\x01''::bytea)',
-                                 CASE WHEN a.attndims > 0 OR t.typcategory = 'A' THEN 'array_send' ELSE 'int8send' END,
+                                 CASE WHEN a.attndims > 0 OR t.typcategory = 'A' THEN 'array_send'
+                                      WHEN t.typname = 'float8' THEN 'float8send'  -- a time key (model 2's times), by its bits
+                                      ELSE 'int8send' END,
                                  a.attname), ' || ' ORDER BY a.attnum)
           INTO v_hash
           FROM pg_attribute a JOIN pg_type t ON t.oid = a.atttypid

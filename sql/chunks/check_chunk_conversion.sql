@@ -45,7 +45,7 @@ BEGIN
     v_view := tgsis.chunk_relation(p_table, '_chunk_rows')::regclass;
     v_storage := tgsis.storage_table(v_reg.schemaname, v_reg.tablename)::regclass;
     v_shift := round(log(2, v_reg.chunksize))::integer;
-    v_keys := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'key' ORDER BY c.keyorder);
+    v_keys := tgsis.chunk_key(p_table);
     -- floating-point values by their bits (-0.0, NaN payloads), the rest as they are
     v_cols := (SELECT string_agg(CASE WHEN c.role = 'float' OR c.typename = 'double precision' THEN format('float8send(r.%1$I) AS %1$I', c.name)
                                       WHEN c.typename = 'real' THEN format('float4send(r.%1$I) AS %1$I', c.name)

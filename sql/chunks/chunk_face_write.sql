@@ -47,6 +47,9 @@
 -- (A write whose snapshot predates the chunk table's last rewrite, which such
 -- a snapshot sees empty, is refused before, by the face's statement trigger
 -- tgsis.chunk_snapshot_check.)
+-- A chunk's lock is named by its key as text (a double key, model 2's times,
+-- printed exactly whatever the session's extra_float_digits: pinned here, so
+-- that two sessions name one chunk alike).
 -- The temporary tables are refused (42501) when the session made them itself
 -- (another owner): rows written here come only from the face's own rows.
 -- SECURITY DEFINER: it writes the chunk table as its owner.
@@ -56,6 +59,7 @@ LANGUAGE plpgsql
 VOLATILE
 SECURITY DEFINER
 SET search_path = pg_catalog, pg_temp
+SET extra_float_digits = 1  -- the chunks' locks name a double key (times) as text: every session alike, exactly
 AS $$
 DECLARE
     v_table     text := TG_ARGV[0];

@@ -32,7 +32,7 @@ DECLARE
     v_keys  text[];
     v_bad   record;
 BEGIN
-    v_keys := ARRAY(SELECT c.name FROM tgsis.chunk_columns(v_table) c WHERE c.role = 'key' ORDER BY c.keyorder);
+    v_keys := tgsis.chunk_key(v_table);
     EXECUTE format('SELECT concat_ws(%1$L, %2$s) AS object, c.chunk, c.revision, count(*) OVER () AS n '
                    'FROM tgsis_new_chunks c WHERE NOT coalesce(%3$s, false) ORDER BY 1, 2, 3 LIMIT 1',
                    ', ', (SELECT string_agg(format('%L || c.%I', k || ' ', k), ', ') FROM unnest(v_keys) AS k),

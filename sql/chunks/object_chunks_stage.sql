@@ -36,6 +36,13 @@ BEGIN
                   DETAIL = 'tgsis.object_chunks_stage stages chunks of the model tables switched to chunks (tgsis.stored_in_chunks).',
                   HINT = 'write the rows of a table stored as rows through its view or storage';
     END IF;
+    IF cardinality(tgsis.chunk_key(p_table)) <> 1 THEN
+        -- (an object's chunks are keyed by more than the object here: model 2's (geoid, times, chunk))
+        RAISE EXCEPTION 'tgsis.% is chunked by (%, chunk): tgsis.% writes the chunks of tables keyed by the object alone',
+                        quote_ident(p_table), array_to_string(tgsis.chunk_key(p_table), ', '), 'object_chunks_stage'
+            USING ERRCODE = 'TG100',
+                  HINT = format('write its rows through the face tgsis.%I or tgsis.insert_chunk_rows', p_table);
+    END IF;
     v_stage := format('pg_temp.%I', 'tgsis_object_chunks_' || p_table);
     IF to_regclass(v_stage) IS NULL THEN
         v_cols := array_to_string(ARRAY['geoid', 'chunk', 'revision', 'holes']

@@ -72,7 +72,7 @@ BEGIN
     v_size := v_reg.chunksize;
     v_shift := round(log(2, v_reg.chunksize))::integer;
     v_cc := v_reg.chunkcolumn;
-    v_keys := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'key' ORDER BY c.keyorder);
+    v_keys := tgsis.chunk_key(p_table);
     -- the arrays of values (coordinates, or a class's properties), built alike
     v_floats := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'value') ORDER BY c.colorder);
     v_refs := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder);

@@ -65,6 +65,13 @@ BEGIN
                   DETAIL = 'tgsis.swap_object_chunks writes the model tables switched to chunks (tgsis.stored_in_chunks).',
                   HINT = 'write the rows of a table stored as rows through its view or storage';
     END IF;
+    IF cardinality(tgsis.chunk_key(p_table)) <> 1 THEN
+        -- (an object's chunks are keyed by more than the object here: model 2's (geoid, times, chunk))
+        RAISE EXCEPTION 'tgsis.% is chunked by (%, chunk): tgsis.% writes the chunks of tables keyed by the object alone',
+                        quote_ident(p_table), array_to_string(tgsis.chunk_key(p_table), ', '), 'swap_object_chunks'
+            USING ERRCODE = 'TG100',
+                  HINT = format('write its rows through the face tgsis.%I or tgsis.insert_chunk_rows', p_table);
+    END IF;
     v_stage := format('pg_temp.%I', 'tgsis_object_chunks_' || p_table);
     IF to_regclass(v_stage) IS NULL
        OR (SELECT c.relowner FROM pg_class c WHERE c.oid = to_regclass(v_stage))

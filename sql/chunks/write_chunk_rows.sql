@@ -48,6 +48,14 @@
 -- breaking a CHECK constraint of the row table (23514, as the table would).
 -- The callers take the objects' write locks and note the changed objects
 -- (tgsis.object_write_lock, tgsis.note_changed_objects), as they do for rows.
+-- A double precision key (model 2's times) is compared by the float8 =
+-- operator, as the row table's primary key compares it: a row whose key is
+-- equal to a chunk's but not of the same bits (-0.0 written into the chunks of
+-- 0.0, another NaN payload), or two rows of one write with such keys, are
+-- refused by name (TG100): the chunk keeps one key for all its slots, so the
+-- row's bits would be silently replaced. The chunks still to write are compared
+-- as text with extra_float_digits pinned (a session's lower setting would
+-- print two instants alike).
 -- Returns the number of chunks written (rewritten in place, closed, inserted
 -- or deleted; an unchanged one is not written). Runs with the caller's rights (tgsis's owner): internal.
 CREATE FUNCTION tgsis.write_chunk_rows(p_table text, p_rows regclass)
@@ -55,6 +63,7 @@ RETURNS bigint
 LANGUAGE plpgsql
 VOLATILE
 SET search_path = pg_catalog, pg_temp
+SET extra_float_digits = 1  -- chunk keys compared as text (the chunks still to write): a double key exactly
 AS $$
 DECLARE
     v_reg      record;
@@ -70,6 +79,7 @@ DECLARE
     v_geoids   bigint[];
     v_cc       text;
     v_keys     text[];    -- key columns but the chunk column, in key order
+    v_fkeys    text[];    -- those of double precision (model 2's times)
     v_floats   text[];
     v_refs     text[];
     v_vals     text[];    -- every non-key column, in column order
@@ -100,7 +110,7 @@ BEGIN
     v_size := v_reg.chunksize;
     v_shift := round(log(2, v_reg.chunksize))::integer;
     v_cc := v_reg.chunkcolumn;
-    v_keys := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'key' ORDER BY c.keyorder);
+    v_keys := tgsis.chunk_key(p_table);
     -- the value arrays: coordinates (float), or a class's properties (value: NULL allowed, holes marks a hole)
     v_floats := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'value') ORDER BY c.colorder);
     v_refs := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder);
@@ -191,6 +201,35 @@ BEGIN
         PERFORM tgsis.plain_write_check(v_reg.schemaname, v_reg.tablename);  -- TG305
         v_w := 0;
         v_set := ARRAY[0];
+    END IF;
+
+    -- a double precision key (times) equal but not of the same bits as the chunk's or another row's: refused, the
+    -- chunk has one key for all its slots (tgsis.chunk_key says how such keys compare)
+    v_fkeys := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'key' AND c.typename = 'double precision'
+                      ORDER BY c.keyorder);
+    IF cardinality(v_fkeys) > 0 THEN
+        EXECUTE format(
+            'SELECT coalesce((SELECT concat_ws(%5$L, %1$s) FROM (SELECT DISTINCT %1$s, %10$s FROM %2$s r) r
+                                WHERE EXISTS (SELECT FROM %3$s c WHERE %4$s AND (%6$s) AND NOT (%7$s))
+                                LIMIT 1),
+                             (SELECT concat_ws(%5$L, %8$s) FROM %2$s r GROUP BY %9$s
+                              HAVING count(DISTINCT (%10$s)) > 1 LIMIT 1))',
+            (SELECT string_agg(format('r.%I', k), ', ') FROM unnest(v_keys) AS k), p_rows, v_chunk, v_vis, ', ',
+            (SELECT string_agg(format('c.%I = r.%I', k, k), ' AND ') FROM unnest(v_keys) AS k),
+            (SELECT string_agg(format('float8send(c.%I) = float8send(r.%I)', k, k), ' AND ') FROM unnest(v_fkeys) AS k),
+            (SELECT string_agg(format('min(r.%I)', k), ', ') FROM unnest(v_keys) AS k),
+            (SELECT string_agg(format('r.%I', k), ', ') FROM unnest(v_keys) AS k),
+            (SELECT string_agg(format('float8send(r.%I)', k), ', ') FROM unnest(v_fkeys) AS k))
+           INTO v_problem USING v_set;
+        IF v_problem IS NOT NULL THEN
+            RAISE EXCEPTION 'cannot write these rows into %: key (%) is equal to a stored or written key of other bits',
+                            v_name, v_problem
+                USING ERRCODE = 'TG100',
+                      DETAIL = format('%s compare as the primary key of the rows does (-0.0 = 0.0, NaN = NaN); the chunk of a '
+                                      'key keeps one value for all its rows, so other bits would be silently replaced.',
+                                      array_to_string(v_fkeys, ', ')),
+                      HINT = 'write the key with the bits it is stored with (read it back from the table)';
+        END IF;
     END IF;
 
     -- the writing statement, from a template whose {parts} are made by format() from the column lists

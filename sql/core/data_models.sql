@@ -54,6 +54,7 @@ CREATE TABLE tgsis.model_tables (
     chunkcolumn text,
     chunkrefs   text[]   NOT NULL DEFAULT '{}',
     chunksize   integer,
+    chunkdefault boolean NOT NULL DEFAULT false,
     -- rows deleted with their geometry are the geometry's: versioned by its id, in object class feature
     CONSTRAINT model_tables_per_geometry CHECK (geoidcolumn IS NULL OR (objectclass = 'feature' AND geoidcolumn = keycolumn)),
     -- a table stored in chunks (docs/storage.md, "Chunks and the mapping of ids") names its local-id column
@@ -61,7 +62,9 @@ CREATE TABLE tgsis.model_tables (
     CONSTRAINT model_tables_chunks CHECK ((chunkcolumn IS NULL) = (chunksize IS NULL)
                                           AND (chunkcolumn IS NOT NULL OR chunkrefs = '{}')
                                           AND (chunksize IS NULL OR (chunksize >= 64 AND chunksize <= 16384
-                                                                     AND chunksize & (chunksize - 1) = 0)))
+                                                                     AND chunksize & (chunksize - 1) = 0))),
+    -- only a table registered for chunks is switched to them by default
+    CONSTRAINT model_tables_chunkdefault CHECK (NOT chunkdefault OR chunkcolumn IS NOT NULL)
 );
 
 COMMENT ON TABLE tgsis.model_tables IS
@@ -83,6 +86,8 @@ COMMENT ON COLUMN tgsis.model_tables.chunkrefs IS
     'the columns holding vertex ids, stored relative to the chunk''s smallest one (vbase) in its chunk table; empty for a table stored as rows';
 COMMENT ON COLUMN tgsis.model_tables.chunksize IS
     'ids per chunk (a power of two, 64..16384: holes number slots as smallint; 1024 today); NULL when chunkcolumn is NULL';
+COMMENT ON COLUMN tgsis.model_tables.chunkdefault IS
+    'stored in chunks by default: switched by tgsis.create_storage and the upgrade unless tgsis.storage is rows (model 1''s); a table registered for chunks without it stays rows until tgsis.store_in_chunks (model 2''s time tables)';
 
 -- the geometry core: one tgsis.geometry row per stored object of every model
 INSERT INTO tgsis.data_models (model, name, timemodel, create_function, description)

@@ -165,11 +165,11 @@ VALUES (1, 'static 3D objects', 'STATIC', '{MULTIPOINT,MULTILINESTRING,SURFACE,M
         'create_model1_storage', 'static_extent', 'check_static_geometry',
         'objects that do not change in time: vertices and the simplices (points, segments, triangles, tetrahedra) that point at them');
 -- (vertices and simplices are registered for chunks, docs/storage.md; atoms and parts stay rows)
-INSERT INTO tgsis.model_tables (tablename, model, iudorder, geotype, description, chunkcolumn, chunkrefs, chunksize) VALUES
-    ('vrtx',    1, 1, NULL,              'a vertex of a static geometry',             'vrtxid',  '{}', 1024),
-    ('point',   1, 2, 'MULTIPOINT',      'a point of a MULTIPOINT geometry',          'pointid', '{vrtxid1}', 1024),
-    ('segment', 1, 2, 'MULTILINESTRING', 'a segment of a MULTILINESTRING geometry',   'segid',   '{vrtxid1,vrtxid2}', 1024),
-    ('trgl',    1, 2, 'SURFACE',         'a triangle of a SURFACE geometry',          'trglid',  '{vrtxid1,vrtxid2,vrtxid3}', 1024),
-    ('tetra',   1, 2, 'MULTITETRA',      'a tetrahedron of a MULTITETRA geometry',    'tetraid', '{vrtxid1,vrtxid2,vrtxid3,vrtxid4}', 1024),
-    ('atom',    1, 2, NULL,              'a vertex repeating another one (GOCAD ATOM/PATOM)', NULL, '{}', NULL),
-    ('part',    1, 2, NULL,              'a range of simplices forming a part (GOCAD TFACE/ILINE/TVOLUME)', NULL, '{}', NULL);
+INSERT INTO tgsis.model_tables (tablename, model, iudorder, geotype, description, chunkcolumn, chunkrefs, chunksize, chunkdefault) VALUES
+    ('vrtx',    1, 1, NULL,              'a vertex of a static geometry',             'vrtxid',  '{}', 1024, true),
+    ('point',   1, 2, 'MULTIPOINT',      'a point of a MULTIPOINT geometry',          'pointid', '{vrtxid1}', 1024, true),
+    ('segment', 1, 2, 'MULTILINESTRING', 'a segment of a MULTILINESTRING geometry',   'segid',   '{vrtxid1,vrtxid2}', 1024, true),
+    ('trgl',    1, 2, 'SURFACE',         'a triangle of a SURFACE geometry',          'trglid',  '{vrtxid1,vrtxid2,vrtxid3}', 1024, true),
+    ('tetra',   1, 2, 'MULTITETRA',      'a tetrahedron of a MULTITETRA geometry',    'tetraid', '{vrtxid1,vrtxid2,vrtxid3,vrtxid4}', 1024, true),
+    ('atom',    1, 2, NULL,              'a vertex repeating another one (GOCAD ATOM/PATOM)', NULL, '{}', NULL, false),
+    ('part',    1, 2, NULL,              'a range of simplices forming a part (GOCAD TFACE/ILINE/TVOLUME)', NULL, '{}', NULL, false);

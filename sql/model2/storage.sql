@@ -82,7 +82,9 @@ VALUES (2, 'surfaces at instants', 'INSTANTS', '{SURFACE}',
         'create_model2_storage', 'instants_extent', 'check_temporal_geometry',
         'surfaces known at instants t0 < t1 < ..., constant in between (a shape per instant)',
         'merge_instants_by_slice');
-INSERT INTO tgsis.model_tables (tablename, model, iudorder, description) VALUES
-    ('times',      2, 1, 'an instant at which a surface is known'),
-    ('times_vrtx', 2, 2, 'a vertex of a surface at one of its instants'),
-    ('times_trgl', 2, 2, 'a triangle of a surface at one of its instants');
+-- (the vertices and triangles at an instant are registered for chunks, keyed (geoid, times, chunk): docs/storage.md,
+-- "Snapshots at t"; stored as rows until tgsis.store_in_chunks switches them: chunkdefault false)
+INSERT INTO tgsis.model_tables (tablename, model, iudorder, description, chunkcolumn, chunkrefs, chunksize, chunkdefault) VALUES
+    ('times',      2, 1, 'an instant at which a surface is known', NULL, '{}', NULL, false),
+    ('times_vrtx', 2, 2, 'a vertex of a surface at one of its instants', 'vrtxid', '{}', 1024, false),
+    ('times_trgl', 2, 2, 'a triangle of a surface at one of its instants', 'trglid', '{vrtxid1,vrtxid2,vrtxid3}', 1024, false);

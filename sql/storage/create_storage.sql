@@ -14,7 +14,7 @@
 -- A model whose tables are all there is skipped, so the function also serves an
 -- upgrade that registers a new model: its tables are created and granted, and
 -- the geotype/time-model check of tgsis.geometry follows the registry.
--- The tables registered for chunks (tgsis.model_tables.chunkcolumn: model 1's)
+-- The tables registered for chunks by default (tgsis.model_tables.chunkdefault: model 1's)
 -- are switched to chunks right after they are created, empty, when
 -- tgsis.chosen_storage() says chunks (the default; the setting tgsis.storage =
 -- rows keeps rows): docs/storage.md, "The storage switch".
@@ -50,7 +50,7 @@ BEGIN
         IF v_storage = 'chunks' THEN  -- empty: the switch is cheap
             PERFORM tgsis.store_in_chunks(t.tablename)
                FROM tgsis.model_tables t
-              WHERE t.model = v_model.model AND t.chunkcolumn IS NOT NULL
+              WHERE t.model = v_model.model AND t.chunkdefault
               ORDER BY t.iudorder, t.tablename;
         END IF;
         v_created := true;
@@ -67,4 +67,4 @@ $storage$;
 REVOKE ALL ON FUNCTION tgsis.create_storage() FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.create_storage() IS
-    'create the tables of every registered data model (tgsis.data_models, tgsis.model_tables) that are missing, with their grants, those registered for chunks stored in chunks unless the setting tgsis.storage is rows (tgsis.chosen_storage); returns whether it created any. Run by the plain-SQL script and by tgsis.install after CREATE EXTENSION, so that they are not extension members and pg_dump keeps them';
+    'create the tables of every registered data model (tgsis.data_models, tgsis.model_tables) that are missing, with their grants, those registered for chunks by default (chunkdefault) stored in chunks unless the setting tgsis.storage is rows (tgsis.chosen_storage); returns whether it created any. Run by the plain-SQL script and by tgsis.install after CREATE EXTENSION, so that they are not extension members and pg_dump keeps them';

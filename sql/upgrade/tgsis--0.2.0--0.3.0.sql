@@ -109,11 +109,18 @@ ALTER TABLE tgsis.model_tables
     ADD CONSTRAINT model_tables_chunks CHECK ((chunkcolumn IS NULL) = (chunksize IS NULL)
                                               AND (chunkcolumn IS NOT NULL OR chunkrefs = '{}')
                                               AND (chunksize IS NULL OR (chunksize >= 64 AND chunksize <= 16384
-                                                                         AND chunksize & (chunksize - 1) = 0)));
-UPDATE tgsis.model_tables t SET chunkcolumn = c.chunkcolumn, chunkrefs = c.chunkrefs, chunksize = 1024
-  FROM (VALUES ('vrtx', 'vrtxid', '{}'::text[]), ('point', 'pointid', '{vrtxid1}'), ('segment', 'segid', '{vrtxid1,vrtxid2}'),
-               ('trgl', 'trglid', '{vrtxid1,vrtxid2,vrtxid3}'), ('tetra', 'tetraid', '{vrtxid1,vrtxid2,vrtxid3,vrtxid4}'))
-       AS c (tablename, chunkcolumn, chunkrefs)
+                                                                         AND chunksize & (chunksize - 1) = 0))),
+    -- model 1's tables are stored in chunks by default, model 2's time tables are registered for them only
+    ADD COLUMN chunkdefault boolean NOT NULL DEFAULT false,
+    ADD CONSTRAINT model_tables_chunkdefault CHECK (NOT chunkdefault OR chunkcolumn IS NOT NULL);
+COMMENT ON COLUMN tgsis.model_tables.chunkdefault IS
+    'stored in chunks by default: switched by tgsis.create_storage and the upgrade unless tgsis.storage is rows (model 1''s); a table registered for chunks without it stays rows until tgsis.store_in_chunks (model 2''s time tables)';
+UPDATE tgsis.model_tables t SET chunkcolumn = c.chunkcolumn, chunkrefs = c.chunkrefs, chunksize = 1024, chunkdefault = c.dflt
+  FROM (VALUES ('vrtx', 'vrtxid', '{}'::text[], true), ('point', 'pointid', '{vrtxid1}', true),
+               ('segment', 'segid', '{vrtxid1,vrtxid2}', true), ('trgl', 'trglid', '{vrtxid1,vrtxid2,vrtxid3}', true),
+               ('tetra', 'tetraid', '{vrtxid1,vrtxid2,vrtxid3,vrtxid4}', true),
+               ('times_vrtx', 'vrtxid', '{}', false), ('times_trgl', 'trglid', '{vrtxid1,vrtxid2,vrtxid3}', false))
+       AS c (tablename, chunkcolumn, chunkrefs, dflt)
  WHERE t.tablename = c.tablename;
 -- @handled model1/storage.sql
 
@@ -370,7 +377,7 @@ BEGIN
     v_members := ARRAY(SELECT d.classid::oid::text || ':' || d.objid::text FROM pg_catalog.pg_depend d
                         WHERE d.deptype = 'e' AND d.refobjid = v_extension);
     FOR v_table IN SELECT t.tablename FROM tgsis.model_tables t
-                    WHERE t.chunkcolumn IS NOT NULL AND to_regclass(format('tgsis.%I', t.tablename)) IS NOT NULL
+                    WHERE t.chunkdefault AND to_regclass(format('tgsis.%I', t.tablename)) IS NOT NULL
                     ORDER BY t.model, t.iudorder, t.tablename LOOP
         CONTINUE WHEN tgsis.stored_in_chunks(v_table);
         BEGIN

@@ -6,7 +6,10 @@
 -- of object p_geoid (column p_okey) of a versioned table's storage written or
 -- closed in one of the revisions p_since (those not in all three of the
 -- base, parent and version sets). Read through tgsis.storage_run: the
--- caller's rights, or the table owner's runner as tgsis's owner.
+-- caller's rights, or the table owner's runner as tgsis's owner. Stored in
+-- chunks (model 2's time tables: tgsis.storage_row_versions), every slot of a
+-- chunk version written or closed there: more keys than changed, which the
+-- merge compares state by state (a key no state sees otherwise merges to itself).
 CREATE FUNCTION tgsis.merge_changed_keys(p_table tgsis.versioned_tables, p_okey text, p_keys text[], p_geoid bigint,
                                          p_since integer[])
 RETURNS SETOF text[]
@@ -17,10 +20,10 @@ AS $$
 BEGIN
     RETURN QUERY
     SELECT r FROM tgsis.storage_run(p_table, false, format(
-               'SELECT DISTINCT ARRAY[%s] FROM %I.%I v WHERE v.%I = $1[1]::bigint
+               'SELECT DISTINCT ARRAY[%s] FROM %s v WHERE v.%I = $1[1]::bigint
                    AND (v.revision = ANY ($2) OR (v.revclosed AND v.lastrevs && $2))',
                (SELECT string_agg(format('v.%I::text', k.c), ', ' ORDER BY k.o) FROM unnest(p_keys) WITH ORDINALITY AS k(c, o)),
-               p_table.schemaname, p_table.tablename || '_ver', p_okey),
+               tgsis.storage_row_versions(p_table.schemaname, p_table.tablename), p_okey),
            p_1 => ARRAY[p_geoid::text], p_2 => p_since) AS r;
 END
 $$;

@@ -142,9 +142,10 @@ BEGIN
         INSERT INTO pg_temp.tgsis_ms_key
         SELECT v_spec.tab, r[1]::float8, r[2]::bigint
           FROM tgsis.storage_run(v_spec.vt, false, format(
-                 'SELECT DISTINCT ARRAY[v.%1$I::text, v.%2$I::text] FROM %3$I.%4$I v
+                 'SELECT DISTINCT ARRAY[v.%1$I::text, v.%2$I::text] FROM %3$s v
                    WHERE v.%5$I = $1[1]::bigint AND v.%1$I = ANY ($1[2]::float8[])',
-                 v_spec.tcol, v_spec.idcol, (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver', v_spec.okey),
+                 v_spec.tcol, v_spec.idcol, tgsis.storage_row_versions((v_spec.vt).schemaname, (v_spec.vt).tablename), NULL,
+                 v_spec.okey),
                p_1 => ARRAY[v_key, ARRAY(SELECT k.t FROM pg_temp.tgsis_ms_key k WHERE k.tab = 'T')::text]) AS r;
     END LOOP;
     -- a vertex's (a cell's) rows go together: its geometry row and its property row
@@ -176,13 +177,15 @@ BEGIN
                      AND v.revision = ANY (s.revs) AND NOT (v.revclosed AND v.lastrevs && s.revs)',
                  v_spec.tcol, CASE WHEN v_spec.idcol IS NULL THEN '''0''' ELSE format('v.%I::text', v_spec.idcol) END, v_vals,
                  v_bits, v_eq, CASE WHEN v_spec.tab = 'T' THEN '''''' ELSE v_el END,
-                 (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver', v_spec.okey,
-                 -- (the keys first: each found through the primary key, not by a scan of the instants' rows)
+                 NULL, NULL, v_spec.okey,
+                 -- (the keys first: each found through the primary key, not by a scan of the instants' rows; stored
+                 -- in chunks, the stored versions of only the chunks holding the ids: tgsis.storage_row_versions)
                  CASE WHEN v_spec.idcol IS NULL
-                      THEN format('%I.%I v', (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver')
+                      THEN format('%s v', tgsis.storage_row_versions((v_spec.vt).schemaname, (v_spec.vt).tablename))
                       ELSE format('(SELECT DISTINCT k.t, k.id FROM unnest($1[4]::float8[], $5) AS k (t, id)) AS k
-                                   JOIN %I.%I v ON v.%I = k.t AND v.%I = k.id',
-                                  (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver', v_spec.tcol, v_spec.idcol) END),
+                                   JOIN %s v ON v.%I = k.t AND v.%I = k.id',
+                                  tgsis.storage_row_versions((v_spec.vt).schemaname, (v_spec.vt).tablename, v_spec.ids),
+                                  v_spec.tcol, v_spec.idcol) END),
                p_1 => ARRAY[v_key, v_spec.ts::text, v_cset::text, v_spec.kts::text], p_2 => v_base,
                p_3 => v_pset, p_5 => v_spec.ids) AS r;
     END LOOP;

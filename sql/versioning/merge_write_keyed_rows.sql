@@ -36,6 +36,8 @@ DECLARE
     v_casts   text;
     v_count   bigint;
     v_written bigint := 0;
+    v_tab     text;
+    v_shape   text;
 BEGIN
     -- the keys of $1 (its first element the object) as a relation k (k1, ..., kn) of the columns' types
     SELECT format('(SELECT DISTINCT %s FROM generate_series(0, (cardinality($1) - 1) / %s - 1) AS g(i)) AS k',
@@ -45,6 +47,64 @@ BEGIN
       INTO v_keyset, v_on
       FROM unnest(p_keys) WITH ORDINALITY AS u(c, o)
       JOIN pg_catalog.pg_attribute a ON a.attrelid = v_rel AND a.attname = u.c AND NOT a.attisdropped;
+    IF p_table.schemaname = 'tgsis' AND tgsis.stored_in_chunks(p_table.tablename) THEN
+        -- stored in chunks (model 2's time tables): the same rights asked, then the keys that go (those not written
+        -- again) and the rows written as one set by the writer of chunk contents, in the session's working
+        -- revision (the version's: the caller put the session there), each touched chunk once
+        IF cardinality(p_gone) > 0 THEN
+            PERFORM tgsis.check_merge_table_write(p_table, 'DELETE', p_geoid);
+        END IF;
+        IF cardinality(p_fresh) > 0 THEN
+            PERFORM tgsis.check_merge_table_write(p_table, 'INSERT', p_geoid, true);
+        END IF;
+        IF coalesce(cardinality(p_gone), 0) + coalesce(cardinality(p_fresh), 0) = 0 THEN
+            RETURN 0;
+        END IF;
+        SELECT count(*)::integer,
+               string_agg(format('%I', c.attname), ', ' ORDER BY c.o),
+               string_agg(format('($1[2 + g.i * %%1$s + %s])::%s', c.o - 1, format_type(c.atttypid, c.atttypmod)), ', ' ORDER BY c.o)
+          INTO v_width, v_cols, v_casts
+          FROM (SELECT a.attname, a.atttypid, a.atttypmod,
+                       row_number() OVER (ORDER BY coalesce(array_position(p_keys, a.attname::text), v_k + 1), a.attnum) AS o
+                  FROM pg_catalog.pg_attribute a
+                 WHERE a.attrelid = v_rel AND a.attnum > 0 AND NOT a.attisdropped AND a.attname <> p_okey) AS c;
+        -- (one table of the session's for every object and merge: a table made and dropped per object keeps a lock
+        -- until the transaction ends, and a merge of many objects would run out of the shared lock table)
+        v_tab := format('pg_temp.%I', 'tgsis_merge_rows_' || p_table.tablename);
+        IF to_regclass(v_tab) IS NULL THEN
+            EXECUTE format('SELECT tgsis.%I($1)::text', 'row_shape') INTO v_shape USING p_table.tablename;
+            EXECUTE format('CREATE TEMP TABLE %s AS SELECT *, false AS _delete FROM %s WITH NO DATA', v_tab, v_shape);
+        ELSIF (SELECT c.relowner FROM pg_class c WHERE c.oid = to_regclass(v_tab))
+              <> (SELECT r.oid FROM pg_roles r WHERE r.rolname = current_user) THEN
+            RAISE EXCEPTION 'the session''s table % was not made by tgsis.merge_write_keyed_rows', v_tab
+                USING ERRCODE = 'insufficient_privilege', HINT = 'drop the temporary table and merge again';
+        ELSE
+            EXECUTE format('TRUNCATE %s', v_tab);
+        END IF;
+        IF cardinality(p_fresh) > 0 THEN
+            EXECUTE format('INSERT INTO %s (%I, %s, _delete) SELECT $1[1]::bigint, %s, false '
+                           'FROM generate_series(0, (cardinality($1) - 1) / %s - 1) AS g(i)',
+                           v_tab, p_okey, v_cols, format(v_casts, v_width), v_width)
+              USING ARRAY[p_geoid::text] || p_fresh;
+            GET DIAGNOSTICS v_count = ROW_COUNT;
+            v_written := v_written + v_count;
+        END IF;
+        IF cardinality(p_gone) > 0 THEN
+            EXECUTE format('INSERT INTO %s (%I, %s, _delete) SELECT $1[1]::bigint, %s, true FROM %s '
+                           'WHERE NOT EXISTS (SELECT FROM %s v WHERE v.%I = $1[1]::bigint AND %s)',
+                           v_tab, p_okey, (SELECT string_agg(format('%I', u.c), ', ' ORDER BY u.o) FROM unnest(p_keys) WITH ORDINALITY AS u(c, o)),
+                           (SELECT string_agg(format('k.%I', 'k' || u.o), ', ' ORDER BY u.o) FROM unnest(p_keys) WITH ORDINALITY AS u(c, o)),
+                           v_keyset, v_tab, p_okey, v_on)
+              USING ARRAY[p_geoid::text] || p_gone;
+            v_written := v_written + cardinality(p_gone) / v_k;
+        END IF;
+        EXECUTE format('SELECT tgsis.%I($1, $2)', 'write_chunk_rows') INTO v_count USING p_table.tablename, v_tab::regclass;
+        IF v_count > 0 THEN
+            PERFORM tgsis.note_changed_objects(p_table.schemaname, p_table.tablename, p_revision, ARRAY[p_geoid::text]);
+        END IF;
+        EXECUTE format('TRUNCATE %s', v_tab);
+        RETURN v_written;
+    END IF;
     IF cardinality(p_gone) > 0 THEN
         PERFORM tgsis.check_merge_table_write(p_table, 'DELETE', p_geoid);
         SELECT r[1]::bigint INTO v_count FROM tgsis.storage_run(p_table, true, format(

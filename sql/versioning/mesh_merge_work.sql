@@ -207,7 +207,8 @@ BEGIN
         v_table := 'times_trgl';
         v_cellid := 'trglid';
         v_k := 3;
-        v_vsrc := 'tgsis.times_vrtx_ver';
+        v_vsrc := tgsis.storage_row_versions('tgsis', 'times_vrtx');  -- (decoded chunk versions when stored in chunks)
+        v_csrc := tgsis.storage_row_versions('tgsis', 'times_trgl');
         v_obj := format('v.geoid = $1 AND v.times = %L::float8', p_times);
     ELSE  -- model 3: the period's nodes at the geometry instant (d4dvrtx), the period's triangles (d4dtrgl), their
           -- node columns named as the other models' vertex columns (simple subqueries: planned as the tables)

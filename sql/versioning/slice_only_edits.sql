@@ -105,10 +105,10 @@ BEGIN
           FROM tgsis.storage_run(v_t, false, format(
                  'SELECT ARRAY[s.side::text, %1$s, %2$s, md5(string_agg(ROW(%3$s)::text, E''\n'' ORDER BY ROW(%3$s)::text))]
                     FROM (VALUES (1, $2), (2, $5::integer[]), (3, $3)) AS s (side, revs)
-                    JOIN %4$I.%5$I v ON v.%6$I = $1[1]::bigint
+                    JOIN %4$s%5$s v ON v.%6$I = $1[1]::bigint
                                     AND v.revision = ANY (s.revs) AND NOT (v.revclosed AND v.lastrevs && s.revs)
                    GROUP BY s.side, %1$s, %2$s',
-                 v_km, v_kt, v_cols, v_spec[1], v_spec[2] || '_ver', v_spec[3]),
+                 v_km, v_kt, v_cols, tgsis.storage_row_versions(v_spec[1], v_spec[2]), '', v_spec[3]),
                p_1 => ARRAY[p_geoid::text], p_2 => v_base, p_3 => v_version.workingset,
                p_5 => v_parent.workingset::bigint[]) AS r;
         IF v_spec[2] = v_class.protablename THEN  -- per-instant feature properties: column by column, as Python merges them
@@ -124,10 +124,10 @@ BEGIN
               FROM tgsis.storage_run(v_t, false, format(
                      'SELECT ARRAY[s.side::text, %1$s, %2$s, c.name, c.value]
                         FROM (VALUES (1, $2), (2, $5::integer[]), (3, $3)) AS s (side, revs)
-                        JOIN %4$I.%5$I v ON v.%6$I = $1[1]::bigint
+                        JOIN %4$s%5$s v ON v.%6$I = $1[1]::bigint
                                         AND v.revision = ANY (s.revs) AND NOT (v.revclosed AND v.lastrevs && s.revs)
                        CROSS JOIN LATERAL (VALUES %3$s) AS c (name, value)',
-                     v_km, v_kt, v_cols, v_spec[1], v_spec[2] || '_ver', v_spec[3]),
+                     v_km, v_kt, v_cols, tgsis.storage_row_versions(v_spec[1], v_spec[2]), '', v_spec[3]),
                    p_1 => ARRAY[p_geoid::text], p_2 => v_base, p_3 => v_version.workingset,
                    p_5 => v_parent.workingset::bigint[]) AS r;
         END IF;

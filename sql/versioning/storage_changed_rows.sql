@@ -7,7 +7,8 @@
 -- so every slot of a changed chunk looked changed: 1,024 keys per chunk for one
 -- moved vertex, and the regions' work, the discards and the merged mesh's
 -- validity were sized by chunks, not by the change (issue 40). Here, of a table
--- stored in chunks, the chunks with a version written or closed in those
+-- stored in chunks, the chunks (by their key, tgsis.chunk_key: an instant's
+-- chunks of model 2 apart) with a version written or closed in those
 -- revisions are compared slot by slot between the chunk versions the base, the
 -- parent and the child see (each at most one): a slot is changed when its
 -- presence differs (a hole, NULL first column or holes) or any of its decoded
@@ -38,6 +39,8 @@ DECLARE
     v_one   text;
     v_side  text[] := '{}';
     v_a     text;
+    v_key   text[];  -- the chunk key before chunk (tgsis.chunk_key: geoid; geoid, times for model 2)
+    v_kk    text;    -- k's key columns, then chunk
 BEGIN
     IF p_schema IS DISTINCT FROM 'tgsis' OR NOT tgsis.stored_in_chunks(p_table) THEN
         RETURN tgsis.storage_row_versions(p_schema, p_table);
@@ -50,6 +53,8 @@ BEGIN
                      EXCEPT (SELECT r FROM unnest(p_base) AS r INTERSECT SELECT r FROM unnest(p_parent) AS r
                              INTERSECT SELECT r FROM unnest(p_child) AS r)
                      ORDER BY 1);
+    EXECUTE format('SELECT tgsis.%I($1)', 'chunk_key') INTO v_key USING p_table;
+    v_kk := array_to_string(ARRAY(SELECT format('k.%I', k) FROM unnest(v_key) AS k) || 'k.chunk'::text, ', ');
     -- a slot's signature: its decoded values, floats by their send forms (bit for bit); true first, never NULL
     EXECUTE format('SELECT string_agg(CASE WHEN c.role IN (%L, %L) AND c.typename = %L THEN format(%L, c.name)
                                            WHEN c.role IN (%L, %L) AND c.typename = %L THEN format(%L, c.name)
@@ -66,30 +71,35 @@ BEGIN
         v_side := v_side || format(
             '(SELECT s.o, ROW(true, %s) AS sig
                 FROM (SELECT u.o, %s FROM tgsis.%I %s CROSS JOIN LATERAL unnest(%s) WITH ORDINALITY AS u(%s, o)
-                       WHERE %s.geoid = k.geoid AND %s.chunk = k.chunk AND %s.revision = ANY (%L::integer[])
+                       WHERE %s AND %s.revision = ANY (%L::integer[])
                          AND NOT (%s.revclosed AND %s.lastrevs && %L::integer[]) AND %s) AS s)',
             v_sig, v_dec.select_list, p_table || '_chunk', v_a, v_dec.arrays, v_dec.aliases,
-            v_a, v_a, v_a, CASE v_a WHEN 'b' THEN p_base WHEN 'p' THEN p_parent ELSE p_child END,
+            (SELECT string_agg(format('%I.%I = k.%I', v_a, k, k), ' AND ') FROM unnest(v_key || 'chunk'::text) AS k),
+            v_a, CASE v_a WHEN 'b' THEN p_base WHEN 'p' THEN p_parent ELSE p_child END,
             v_a, v_a, CASE v_a WHEN 'b' THEN p_base WHEN 'p' THEN p_parent ELSE p_child END, v_dec.present);
     END LOOP;
     v_one := format(
-        '(SELECT k.geoid, k.chunk, ARRAY(SELECT coalesce(b.o, p.o, q.o) FROM %s AS b FULL JOIN %s AS p ON p.o = b.o
+        '(SELECT %s, ARRAY(SELECT coalesce(b.o, p.o, q.o) FROM %s AS b FULL JOIN %s AS p ON p.o = b.o
                                            FULL JOIN %s AS q ON q.o = coalesce(b.o, p.o)
                                           WHERE b.sig IS DISTINCT FROM p.sig OR b.sig IS DISTINCT FROM q.sig) AS slots
-            FROM (SELECT DISTINCT c.geoid, c.chunk FROM tgsis.%I c
-                   WHERE c.geoid = ANY (%L::bigint[])
+            FROM (SELECT DISTINCT %s FROM tgsis.%I c
+                   WHERE c.%I = ANY (%L::bigint[])
                      AND (c.revision = ANY (%L::integer[]) OR (c.revclosed AND c.lastrevs && %L::integer[]))) AS k)',
-        v_side[1], v_side[2], v_side[3], p_table || '_chunk', coalesce(p_geoids, '{}'), v_since, v_since);
+        v_kk, v_side[1], v_side[2], v_side[3],
+        array_to_string(ARRAY(SELECT format('c.%I', k) FROM unnest(v_key) AS k) || 'c.chunk'::text, ', '),
+        p_table || '_chunk', v_key[1], coalesce(p_geoids, '{}'), v_since, v_since);
     EXECUTE format('SELECT d.select_list, d.arrays, d.aliases, d.present FROM tgsis.%I($1, $2) AS d', 'chunk_decode_sql')
        INTO v_dec USING p_table, 'c';
     -- (the changed slots MATERIALIZED: computed once per chunk, not per decoded slot that tests them)
     RETURN format('(WITH w AS MATERIALIZED %s
                     SELECT %s, c.revision, c.lastrevs, c.revclosed
-                      FROM w JOIN tgsis.%I c ON c.geoid = w.geoid AND c.chunk = w.chunk AND cardinality(w.slots) > 0
+                      FROM w JOIN tgsis.%I c ON %s AND cardinality(w.slots) > 0
                      CROSS JOIN LATERAL unnest(%s) WITH ORDINALITY AS u(%s, o)
                      WHERE %s AND u.o = ANY (w.slots)
                        AND (c.revision = ANY (%L::integer[]) OR (c.revclosed AND c.lastrevs && %L::integer[])))',
-                  v_one, v_dec.select_list, p_table || '_chunk', v_dec.arrays, v_dec.aliases, v_dec.present,
+                  v_one, v_dec.select_list, p_table || '_chunk',
+                  (SELECT string_agg(format('c.%I = w.%I', k, k), ' AND ') FROM unnest(v_key || 'chunk'::text) AS k),
+                  v_dec.arrays, v_dec.aliases, v_dec.present,
                   v_since, v_since);
 END
 $$;

@@ -357,9 +357,36 @@ def pytest_configure(config: pytest.Config) -> None:
     )
 
 
+def time_storage() -> Literal["rows", "chunks"]:
+    """The storage of model 2's time tables (times_vrtx, times_trgl) in the templates: ``$TGSIS_TEST_TIME_STORAGE``.
+
+    ``rows`` (the default, the product's) or ``chunks``: the templates' tables registered for chunks but not by
+    default (``tgsis.model_tables.chunkdefault``) are then switched by ``tgsis.store_in_chunks`` after the install.
+
+    Raises
+    ------
+    pytest.UsageError
+        ``$TGSIS_TEST_TIME_STORAGE`` names no storage of :data:`STORAGES`.
+    """
+    value = os.environ.get("TGSIS_TEST_TIME_STORAGE") or "rows"
+    if value not in STORAGES:
+        raise pytest.UsageError(f"TGSIS_TEST_TIME_STORAGE={value!r} names no storage: use one of {', '.join(STORAGES)}")
+    return "chunks" if value == "chunks" else "rows"
+
+
 def _install_template(conn: psycopg.Connection[Any], method: Literal["extension", "sql"], storage: str) -> str:
-    """Install tgsis into a template database with model 1 stored in ``storage``; the route taken."""
-    return install(conn, method=method, storage="rows" if storage == "rows" else "chunks").method
+    """Install tgsis into a template database with model 1 stored in ``storage``; the route taken.
+
+    Model 2's time tables are stored as :func:`time_storage` says.
+    """
+    route = install(conn, method=method, storage="rows" if storage == "rows" else "chunks").method
+    if time_storage() == "chunks":
+        conn.execute(
+            "SELECT tgsis.store_in_chunks(tablename) FROM tgsis.model_tables"
+            " WHERE chunkcolumn IS NOT NULL AND NOT chunkdefault ORDER BY model, iudorder, tablename"
+        )
+        conn.commit()
+    return route
 
 
 @pytest.fixture(scope="session")
@@ -481,6 +508,7 @@ def pytest_terminal_summary(terminalreporter: Any) -> None:
         f" (model 1 in: {', '.join(_SESSION.get('storages', [])) or 'no template made'}; default storage: "
         f"{default_storage()}"
         + (", the other one for every other file" if os.environ.get("TGSIS_TEST_STORAGE_BY_FILE") == "1" else "")
+        + ("; model 2's time tables in chunks" if time_storage() == "chunks" else "")
         + "); CREATE EXTENSION tgsis: "
         + ("available" if server.extension_files is None else f"NOT available ({server.extension_files})")
     )

@@ -32,6 +32,7 @@ from tgsis.errors import (
     DatabaseError,
     InUseError,
     InvalidGeometryError,
+    InvalidInputError,
     InvalidPropertyError,
     NotVersionedError,
 )
@@ -390,6 +391,39 @@ def copy_in(conn: Conn, table: sql.Composable, columns: Sequence[str], payload: 
         copy.write(payload)
 
 
+def insert_chunk_rows(conn: Conn, table: str, columns: Sequence[tuple[str, npt.ArrayLike, str]]) -> int:
+    """Insert rows of the model table ``tgsis.<table>`` stored in chunks: one call of ``tgsis.insert_chunk_rows``.
+
+    ``columns``: ``(name, values (n,), wire type)``, every column of the row table once, bigint (``int8``) or
+    double precision (``float8``); sent in binary (the doubles bit for bit). Returns the chunks written.
+
+    Raises
+    ------
+    InvalidInputError
+        A column of another wire type (nothing is sent).
+    """
+    ints = [(n, np.asarray(v, dtype=np.int64)) for n, v, w in columns if w == "int8"]
+    floats = [(n, np.asarray(v, dtype=np.float64)) for n, v, w in columns if w == "float8"]
+    if len(ints) + len(floats) != len(columns):
+        raise InvalidInputError(
+            f"tgsis.{table}: rows stored in chunks are inserted as bigint and double precision columns only",
+            detail=f"columns {[(n, w) for n, _, w in columns]}",
+        )
+    count = len(ints[0][1]) if ints else 0
+    int_rows = np.stack([v for _, v in ints]) if ints else np.empty((0, count), dtype=np.int64)
+    float_rows = np.stack([v for _, v in floats]) if floats else None
+    row = conn.execute(
+        "SELECT tgsis.insert_chunk_rows(%s, %s::text[], %b::bigint[], %b::float8[])",
+        (
+            table,
+            [n for n, _ in (*ints, *floats)],
+            int_rows.tolist(),
+            float_rows.tolist() if float_rows is not None and count else None,
+        ),
+    ).fetchone()
+    return int(row[0]) if row is not None else 0
+
+
 @contextlib.contextmanager
 def staged(conn: Conn, table: sql.Composable, columns: Sequence[str]) -> Iterator[sql.Composable]:
     """Where a COPY into ``table`` goes: the table, or a temporary table moved into it when the COPY ends.
@@ -445,6 +479,9 @@ class Storage:
     #: versioned property tables stored in chunks (``tgsis.store_class_in_chunks``): rows go through their face,
     #: whose trigger writes the chunks in the working revision
     faces: frozenset[tuple[str, str]] = frozenset()
+    #: model tables stored in chunks (``tgsis.stored_in_chunks``; versioned or not): rows COPied into them go in
+    #: one set-based call of ``tgsis.insert_chunk_rows`` (model 2's times_vrtx and times_trgl once switched)
+    chunked: frozenset[tuple[str, str]] = frozenset()
 
     @classmethod
     def of(cls, conn: Conn, fc: FeatureClass | None = None) -> Storage:
@@ -474,7 +511,15 @@ class Storage:
         assert session is not None
         version, viewing, working = session
         elsewhere = version != "DEFAULT" or (viewing is not None and viewing != working)
-        storage = cls(versioned, None, version if elsewhere else None, viewing if elsewhere else None, stored_in, faces)
+        chunked = frozenset(
+            ("tgsis", str(r[0]))
+            for r in conn.execute(
+                "SELECT tablename FROM tgsis.model_tables WHERE chunkcolumn IS NOT NULL AND tgsis.stored_in_chunks(tablename)"
+            ).fetchall()
+        )
+        storage = cls(
+            versioned, None, version if elsewhere else None, viewing if elsewhere else None, stored_in, faces, chunked
+        )
         unversioned = fc is not None and not fc.versioned
         if unversioned:
             assert fc is not None
@@ -537,7 +582,15 @@ class Storage:
         )
 
     def copy(self, conn: Conn, schema: str, table: str, columns: Sequence[tuple[str, npt.ArrayLike, str]]) -> None:
-        """COPY ``(name, values, wire type)`` columns into ``schema.table`` in the working revision."""
+        """COPY ``(name, values, wire type)`` columns into ``schema.table`` in the working revision.
+
+        A model table stored in chunks (:attr:`chunked`) takes them in one call of ``tgsis.insert_chunk_rows``
+        (its checks are the face's; a key already there is refused as on rows).
+        """
+        if (schema, table) in self.chunked:
+            self.check(schema, table)
+            insert_chunk_rows(conn, table, columns)
+            return
         copy_in(conn, *self._prepared(schema, table, columns))
 
     def copy_all(self, conn: Conn, tables: Sequence[tuple[str, str, Callable[[], Columns]]]) -> None:
@@ -558,6 +611,9 @@ class Storage:
             made = [makers.submit(columns) for _, _, columns in tables]
             try:
                 for (schema, table, _), future in zip(tables, made):
+                    if (schema, table) in self.chunked:
+                        self.copy(conn, schema, table, future.result())
+                        continue
                     target, columns = self._target(schema, table, future.result())
                     chunks = encode_chunks([(values, wire) for _, values, wire in columns])
                     ahead = coders.submit(next, chunks, None)

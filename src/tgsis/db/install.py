@@ -408,7 +408,9 @@ def _storage_steps(conn: psycopg.Connection[Any], storage: Storage) -> list[str]
         "         FILTER (WHERE tgsis.stored_in_chunks(t.tablename)),"
         "       array_agg(t.tablename::text ORDER BY t.model, t.iudorder, t.tablename)"
         "         FILTER (WHERE NOT tgsis.stored_in_chunks(t.tablename))"
-        "  FROM tgsis.model_tables t WHERE t.chunkcolumn IS NOT NULL"
+        # the tables stored in chunks by default (model 1's), and any other switched by hand (model 2's time tables)
+        "  FROM tgsis.model_tables t"
+        " WHERE t.chunkdefault OR (t.chunkcolumn IS NOT NULL AND tgsis.stored_in_chunks(t.tablename))"
     ).fetchone()
     if row is None:
         return []
