@@ -143,6 +143,8 @@ NOT_FROM_THE_CLI = {
     "sql/model4/gmap_conditions.sql": "an SQL building block of gmap_check and md_check, which the command calls with valid arguments",
     "sql/storage/partition_model_storage.sql": "a DBA's set-up step, SQL and Python only (docs/scaling.md): no command",
     "sql/chunks/partition_chunk_storage.sql": "the chunk part of partition_model_storage, a DBA's set-up step: no command",
+    "sql/chunks/store_in_rows.sql": "the way back from chunks of a model table, a DBA's SQL step (docs/storage.md): "
+    "no command",
     "sql/core/no_model_rule.sql": "a data model the registry lacks: only SQL and Python callers can name one "
     "(the commands work on stored features, whose models are registered)",
     "sql/geometry/class_denied_geoids.sql": "the privilege argument of an internal check tgsis's own code calls",
