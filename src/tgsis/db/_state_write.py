@@ -17,7 +17,7 @@ by id, the geometry row's box and counts).
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -43,6 +43,7 @@ __all__ = [
     "key_codes",
     "update_geometry_row",
     "write_model_rows",
+    "write_property_edit",
     "write_sliced_difference",
     "write_state_difference",
     "write_state_rows",
@@ -249,18 +250,45 @@ def _write_properties(
                 if wire not in ("float4", "float8") and chosen.dtype.kind == "f":
                     chosen = chosen.astype(np.int64)
                 columns.append((p.name, chosen, array_wire(wire, p.size)))
-        if not len(gone) and not len(fresh):
-            continue
-        storage.check(fc.schema, protable)
-        # stored in chunks: the whole edit at once, each touched chunk rewritten once (not a rewrite per row)
-        if write_property_rows(conn, fc.schema, protable, geoid, gone, columns if len(fresh) else []) is not None:
-            deleted, inserted = deleted + len(gone), inserted + len(fresh)
-            continue
-        deleted += delete_rows(conn, fc.schema, protable, "_geoid", geoid, "_idx", gone)
-        if len(fresh):
-            storage.copy(conn, fc.schema, protable, columns)
-            inserted += len(fresh)
+        gone_n, fresh_n = write_property_edit(conn, storage, fc.schema, protable, geoid, gone, columns, len(fresh))
+        deleted, inserted = deleted + gone_n, inserted + fresh_n
     return deleted, inserted
+
+
+def write_property_edit(
+    conn: Conn,
+    storage: Storage,
+    schema: str,
+    table: str,
+    geoid: int,
+    gone: npt.ArrayLike,
+    columns: Sequence[tuple[str, npt.ArrayLike, str]],
+    count: int,
+) -> tuple[int, int]:
+    """Write an edit of object ``geoid``'s rows of the property table ``schema.table``; (deleted, inserted).
+
+    The rows of the ids ``gone`` (the ids that go, and those whose row changes) are deleted and the ``count``
+    rows of ``columns`` (``_geoid``, ``_idx`` and the properties, as :meth:`Storage.copy` takes them) written.
+    Stored in chunks: the whole edit in one call (``tgsis.write_property_rows``), each touched chunk rewritten
+    once, not a rewrite per row through the face; on rows: a DELETE and a COPY.
+
+    Parameters
+    ----------
+    gone : (d,) int
+    columns : sequence of (name, (count,) array, wire type)
+    count : int
+        The rows of ``columns`` (0: only deletes).
+    """
+    gone = np.asarray(gone, dtype=np.int64)
+    if not len(gone) and not count:
+        return 0, 0
+    storage.check(schema, table)
+    if write_property_rows(conn, schema, table, geoid, gone, columns if count else []) is not None:
+        return len(gone), count
+    deleted = delete_rows(conn, schema, table, "_geoid", geoid, "_idx", gone)
+    if count:
+        storage.copy(conn, schema, table, columns)
+    return deleted, count
 
 
 def _atoms(state: MeshState) -> tuple[IntArray, IntArray]:

@@ -46,13 +46,12 @@ from tgsis.arguments import checked
 from tgsis.compare import MeshDiff, MeshIndex, compare_meshes
 from tgsis.db._chunk_write import next_id as next_chunk_id
 from tgsis.db._chunk_write import stored_in_chunks
-from tgsis.db._property_chunks import write_property_rows
 from tgsis.db._settings import read_version_settings, restore_version_settings
 from tgsis.db._state_write import (
     PART_PROPERTY,
-    delete_rows,
     update_geometry_row,
     write_model_rows,
+    write_property_edit,
     write_state_rows,
 )
 from tgsis.db._static import (
@@ -403,17 +402,8 @@ def _write_diff(
             ("_idx", new_ids[rewrite], "int8"),
             *((p.name, cell_values[p.name][rewrite], array_wire(SQL_TYPES[p.type], p.size)) for p in props),
         ]
-        if not len(going) and not len(rewrite):
-            continue
-        storage.check(fc.schema, protable)
-        # stored in chunks: the whole edit at once, each touched chunk rewritten once (not a rewrite per row)
-        if write_property_rows(conn, fc.schema, protable, geoid, going, columns if len(rewrite) else []) is not None:
-            deleted, inserted = deleted + len(going), inserted + len(rewrite)
-            continue
-        deleted += delete_rows(conn, fc.schema, protable, "_geoid", geoid, "_idx", going)
-        if len(rewrite):
-            storage.copy(conn, fc.schema, protable, columns)
-            inserted += len(rewrite)
+        gone_n, fresh_n = write_property_edit(conn, storage, fc.schema, protable, geoid, going, columns, len(rewrite))
+        deleted, inserted = deleted + gone_n, inserted + fresh_n
 
     written_v = np.concatenate([moved, added_v])
     for gone, added in (
