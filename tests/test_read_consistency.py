@@ -434,3 +434,87 @@ def test_a_consistent_read_inside_another_on_the_same_connection_runs_plainly(co
         inner = _transfer.consistent_read(conn, "outer", lambda: _transfer.consistent_read(conn, "inner", lambda: 7))
     assert inner == 7
     assert marks == ["mark", "mark"]  # the outer's before and after, none of the inner's
+
+
+@pytest.fixture
+def unrelated(conn: Conn, other: Conn) -> Callable[[], None]:
+    """A commit of the other session that changes nothing a reader reads (a table of its own)."""
+    other.execute("CREATE TABLE IF NOT EXISTS unrelated_log (n bigint)")
+
+    def commit() -> None:
+        other.execute("INSERT INTO unrelated_log VALUES (1)")
+
+    return commit
+
+
+@pytest.mark.parametrize("reader", list(READERS))
+def test_commits_that_change_nothing_read_at_every_try_do_not_stop_the_read(
+    conn: Conn, other: Conn, ids: Ids, interleave: Callable[..., Interleave], unrelated: Callable[[], None], reader: str
+) -> None:
+    """Found by CI: on a busy server (autovacuum's ANALYZE, other databases: the snapshot is the cluster's) a
+    commit landed inside each of the five tries of a read that nothing changed, and the read raised TG003."""
+    read, state, _ = READERS[reader]
+    conn.rollback()
+    expected = state(read(conn, ids))
+    conn.execute("SELECT 1")  # the caller's READ COMMITTED transaction
+    markers = MARKERS_OF.get(reader, MARKERS)
+    counter = interleave(conn, lambda: None, markers, times=1000, skip=SKIP.get(reader, 0))
+    assert state(read(conn, ids)) == expected
+    per_try = counter.fired  # the marked statements of one try (nobody committed: one try)
+    counter.left = 0
+    hook = interleave(conn, unrelated, markers, times=1000, skip=SKIP.get(reader, 0))
+    assert state(read(conn, ids)) == expected
+    assert per_try >= 1 and hook.fired == 2 * per_try  # two tries read the same: one state
+    assert conn.info.transaction_status == psycopg.pq.TransactionStatus.INTRANS
+    conn.rollback()
+
+
+def test_a_change_at_every_try_that_gives_the_same_result_twice_is_that_result(
+    conn: Conn, other: Conn, ids: Ids, interleave: Callable[..., Interleave]
+) -> None:
+    """A commit that writes what is already there (the same name again) changes no row read: the result stands."""
+    conn.rollback()
+    expected = tgsis.fetch_features(conn, "tops", [ids.static])[0].name
+
+    def same_again() -> None:
+        other.execute("UPDATE tgsis.geometry SET geoname = geoname WHERE geoid = %s", (ids.static,))
+
+    conn.execute("SELECT 1")
+    hook = interleave(conn, same_again, MARKERS, times=1000)
+    assert tgsis.fetch_features(conn, "tops", [ids.static])[0].name == expected
+    assert hook.fired == 2
+    conn.rollback()
+
+
+def test_the_same_error_in_two_interleaved_tries_is_raised_not_tg003(conn: Conn, unrelated: Callable[[], None]) -> None:
+    calls: list[int] = []
+
+    def read() -> int:
+        calls.append(len(calls))
+        conn.execute("SELECT 1").fetchone()
+        unrelated()  # each try interleaved
+        raise tgsis.InvalidGeometryError("the state's own defect")
+
+    conn.execute("SELECT 1")
+    with pytest.raises(tgsis.InvalidGeometryError, match="the state's own defect"):
+        _transfer.consistent_read(conn, "a test", read)
+    assert calls == [0, 1]
+    assert conn.execute("SELECT 2").fetchone() == (2,)
+    conn.rollback()
+
+
+def test_the_chunk_download_with_commits_that_change_nothing_read_is_read_twice_and_returned(
+    conn: Conn, ids: Ids, interleave: Callable[..., Interleave], unrelated: Callable[[], None]
+) -> None:
+    if "vrtx" not in _transfer_chunked(conn):
+        pytest.skip("model 1 is stored in rows here: no chunk download")
+    conn.rollback()
+    expected = download_tables(conn, {"vrtx": [ids.static], "trgl": [ids.static]})
+    conn.execute("SELECT 1")
+    hook = interleave(conn, unrelated, ("vrtx_chunk",), times=1000)
+    got = download_tables(conn, {"vrtx": [ids.static], "trgl": [ids.static]})
+    assert hook.fired == 2
+    for table in ("vrtx", "trgl"):
+        for name, column in expected[table][ids.static].columns.items():
+            assert np.array_equal(got[table][ids.static].columns[name], column)
+    conn.rollback()

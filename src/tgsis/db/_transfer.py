@@ -18,13 +18,14 @@ import json
 import logging
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any, Protocol, TypeVar
+from typing import Any, Protocol, TypeVar, cast
 
 import numpy as np
 import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
+from tgsis.db._same_result import same_result
 from tgsis.db.classes import FeatureClass, get_feature_class, stores_part_column
 from tgsis.db.copy import SQL_TYPES, decode_packed, decode_rows, encode_chunks, encode_rows, numpy_dtype, wire_shape
 from tgsis.errors import (
@@ -93,11 +94,19 @@ def consistent_read(conn: Conn, what: str, read: Callable[[], _T], *, tries: int
       commit of one that is not listed changes xmax, and of one that is
       listed changes the list), so every statement of the read saw the same
       committed state; else the savepoint is rolled back and ``read`` runs
-      again, up to ``tries`` times in all. An error ``read`` raises is raised
-      when the state did not change during the try (else the try is run
-      again: the error may come from states mixed). The caller's own
-      uncommitted writes are seen (one transaction); a commit of another
-      session that changes nothing read costs a try all the same.
+      again, up to ``tries`` times in all. Two tries in a row that others'
+      commits interleaved but that read the same thing, bit for bit
+      (:func:`~tgsis.db._same_result.same_result`), read one state: the
+      commits changed nothing read (another database's, autovacuum's
+      ``ANALYZE``, another application's: the snapshot is the whole
+      cluster's), and the second try's result is returned. An error ``read``
+      raises is raised when the state did not change during the try, or when
+      two tries in a row raised it (else the try is run again: the error may
+      come from states mixed). The caller's own uncommitted writes are seen
+      (one transaction). What this cannot tell: commits between the tries'
+      statements that change what one statement reads and change it back
+      before the next try reads it (a write and its undo, each committed, in
+      those few milliseconds) leave two equal tries of mixed states.
 
     A ``consistent_read`` inside another's ``read`` on the same connection runs
     its ``read`` plainly: the outer one checks (and retries) the whole.
@@ -114,8 +123,8 @@ def consistent_read(conn: Conn, what: str, read: Callable[[], _T], *, tries: int
     Raises
     ------
     ConcurrentReadError
-        In a ``READ COMMITTED`` transaction, other sessions committed during each of the ``tries``;
-        the caller's transaction is left as it was.
+        In a ``READ COMMITTED`` transaction, other sessions committed during each of the ``tries``,
+        and no two tries in a row read the same; the caller's transaction is left as it was.
     """
     if id(conn) in _reading.get():
         return read()
@@ -139,6 +148,24 @@ def _snapshot_mark(conn: Conn) -> tuple[str, str, str | None]:
     return str(row[0]), str(row[1]), row[2]
 
 
+@dataclass(frozen=True)
+class _Try:
+    """What one try of a read gave: its result, or the error it raised."""
+
+    result: Any
+    failure: Exception | None
+
+    def same_as(self, other: _Try) -> bool:
+        """The same result bit for bit, or the same error (class, SQLSTATE and message)."""
+        if self.failure is None or other.failure is None:
+            return self.failure is None and other.failure is None and same_result(self.result, other.result)
+        return (
+            type(self.failure) is type(other.failure)
+            and getattr(self.failure, "sqlstate", None) == getattr(other.failure, "sqlstate", None)
+            and str(self.failure) == str(other.failure)
+        )
+
+
 def _consistent_read(conn: Conn, what: str, read: Callable[[], _T], tries: int) -> _T:
     """:func:`consistent_read` of a connection not inside one already."""
     if conn.info.transaction_status == psycopg.pq.TransactionStatus.IDLE:
@@ -149,14 +176,16 @@ def _consistent_read(conn: Conn, what: str, read: Callable[[], _T], tries: int) 
         with conn.transaction():
             return read()
     failure: Exception | None = None
+    previous: _Try | None = None  # the last try whose statements others' commits interleaved
     for attempt in range(1, tries + 1):
         failure = None
+        result: Any = None
         try:
             with conn.transaction() as savepoint:
                 result = read()
                 if _snapshot_mark(conn)[1:] == before[1:]:
-                    return result
-                raise psycopg.Rollback(savepoint)  # states mixed: nothing of the try is kept
+                    return cast(_T, result)
+                raise psycopg.Rollback(savepoint)  # others committed meanwhile: nothing of the try is kept
         except Exception as exc:  # noqa: BLE001 (raised below when the state did not change)
             failure = exc
         if failure is not None and conn.broken:
@@ -164,7 +193,15 @@ def _consistent_read(conn: Conn, what: str, read: Callable[[], _T], tries: int) 
         after = _snapshot_mark(conn)  # the savepoint is rolled back: the transaction reads on
         if failure is not None and after[1:] == before[1:]:
             raise failure  # an error of one state: the read's own
+        this = _Try(result, failure)
+        if previous is not None and previous.same_as(this):
+            # two tries in a row read the same: the commits between their statements changed nothing they read
+            log.debug("%s: try %d read what try %d read: one state", what, attempt, attempt - 1)
+            if failure is not None:
+                raise failure
+            return cast(_T, result)
         log.debug("%s: other sessions committed during try %d of the read, read again", what, attempt)
+        previous = this
         before = after
     raise ConcurrentReadError(
         f"{what} read several tables in a READ COMMITTED transaction while other sessions committed: "
