@@ -117,7 +117,8 @@ def consistent_read(conn: Conn, what: str, read: Callable[[], _T], *, tries: int
         The read, as its error names it (e.g. ``"fetch_features"``).
     read : callable
         The statements, run on ``conn``; may run more than once, so it should have
-        no effect outside the database (its writes, if any, are rolled back with the savepoint).
+        no effect outside the database, and it should not write: a try's writes are rolled back
+        with its savepoint, also when its result is returned (two equal tries).
     tries : int
 
     Raises
