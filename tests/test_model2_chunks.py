@@ -47,6 +47,9 @@ def _series(conn: Conn, name: str = "horizons", times: tuple[float, ...] = TIMES
 
 
 def _class(conn: Conn, versioned: bool) -> None:
+    """The class ``horizons``, the time tables as rows whatever TGSIS_TEST_TIME_STORAGE made them (each test
+    switches them itself)."""
+    _store(conn, "rows")
     tgsis.create_feature_class(
         conn, "horizons", "SURFACE", time_model="INSTANTS", cell_properties=[("porosity", "float8")]
     )
@@ -441,8 +444,7 @@ def _insert_chunk_rows_calls(conn: Conn) -> int:
 
 @pytest.mark.parametrize("versioned", [False, True])
 def test_the_client_transfers_chunks_bit_for_bit(conn: Conn, versioned: bool, monkeypatch: Any) -> None:
-    import tgsis.db._temporal_common as common
-    import tgsis.db.instants as instants
+    import tgsis.db._chunk_transfer as chunk_transfer
 
     _class(conn, versioned)
     _store(conn, "rows")
@@ -464,8 +466,8 @@ def test_the_client_transfers_chunks_bit_for_bit(conn: Conn, versioned: bool, mo
 
         return instant_rows
 
-    monkeypatch.setattr(instants, "instant_rows", spy(instants.instant_rows))
-    monkeypatch.setattr(common, "instant_rows", spy(common.instant_rows))
+    for module in ("tgsis.db.instants", "tgsis.db._temporal_common"):
+        monkeypatch.setattr(f"{module}.instant_rows", spy(chunk_transfer.instant_rows))
     assert _python_reads(conn, on_rows) == expected  # rows converted by the switch, read from chunks
     snapshots = sum(1 for k, v in expected.items() if k.startswith("get_at") and v is not None)
     assert snapshots == 14  # (none after the last instant: not alive)

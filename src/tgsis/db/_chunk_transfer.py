@@ -807,7 +807,11 @@ def upload_instants(
     instants = [float(t) for t in times]
     if not instants:
         return True
-    existing = conn.execute(
+    keys = [str(int(geoid))]
+    if versioned:
+        conn.execute("SELECT tgsis.check_objects_unlocked('feature', %s::text[])", (keys,))  # TG303
+    conn.execute("SELECT tgsis.object_write_lock('feature', %s::text[])", (keys,))  # no face writer of it in flight
+    existing = conn.execute(  # (the instants' bits in binary: never through text)
         sql.SQL("SELECT EXISTS (SELECT FROM {} c WHERE c.geoid = %s AND c.times = ANY (%b::float8[]))").format(
             layout.relation
         ),
@@ -815,10 +819,6 @@ def upload_instants(
     ).fetchone()
     if existing is None or existing[0]:
         return False
-    keys = [str(int(geoid))]
-    if versioned:
-        conn.execute("SELECT tgsis.check_objects_unlocked('feature', %s::text[])", (keys,))  # TG303
-    conn.execute("SELECT tgsis.object_write_lock('feature', %s::text[])", (keys,))
     names = layout.columns.copy_columns()
     statement = sql.SQL("COPY {} ({}) FROM STDIN (FORMAT binary)")
     with staged(conn, layout.relation, names) as into:
