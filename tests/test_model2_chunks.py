@@ -468,6 +468,8 @@ def test_the_client_transfers_chunks_bit_for_bit(conn: Conn, versioned: bool, mo
 
     for module in ("tgsis.db.instants", "tgsis.db._temporal_common"):
         monkeypatch.setattr(f"{module}.instant_rows", spy(chunk_transfer.instant_rows))
+    # an instant's chunks in several blocks (one chunk each), joined by the client
+    monkeypatch.setattr(chunk_transfer, "INSTANT_BLOCK_BITS", 0)
     assert _python_reads(conn, on_rows) == expected  # rows converted by the switch, read from chunks
     snapshots = sum(1 for k, v in expected.items() if k.startswith("get_at") and v is not None)
     assert snapshots == 14  # (none after the last instant: not alive)

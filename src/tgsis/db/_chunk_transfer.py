@@ -733,24 +733,35 @@ def instant_rows(
         sql.SQL(", ").join(sql.SQL("c.{}").format(sql.Identifier(c)) for c in spec.select_columns())
     )
     at = sql.SQL("") if instant is None else sql.SQL(" AND c.times = {}").format(instant)
+    # grouped by blocks of chunks too: a bytea holds 1 GB at most, and array_send writes 4 bytes per element
+    # more (a 40M-triangle instant in one value would pass it); the client joins an instant's blocks
     query = sql.SQL(
         "SELECT f.geoid, a.times, a.n, a.v FROM unnest({geoids}::int8[]) AS f(geoid) "
         "CROSS JOIN LATERAL (SELECT c.times, count(*) AS n, string_agg({record}, ''::bytea) AS v FROM {source} c "
-        "WHERE c.geoid = f.geoid{at} AND {visible} GROUP BY c.times) a"
+        "WHERE c.geoid = f.geoid{at} AND {visible} GROUP BY c.times, c.chunk >> {bits}) a"
     ).format(
         geoids=sql.Literal(list(dict.fromkeys(int(g) for g in geoids))),
         record=record,
         source=layout.relation,
         at=at,
         visible=_visible(layout),
+        bits=sql.Literal(INSTANT_BLOCK_BITS),
     )
     with conn.cursor(binary=True) as cursor:
         groups = cursor.execute(query).fetchall()
+    blocks: dict[tuple[int, float], list[tuple[int, bytes]]] = {}
+    for geoid, times, count, data in groups:  # (an instant's -0.0 and 0.0 are one key, as the face groups them)
+        blocks.setdefault((int(geoid), float(times)), []).append((int(count), bytes(data)))
     result: dict[tuple[int, float], ObjectRows] = {}
-    for geoid, times, count, data in groups:
-        chunks = from_copy(records_as_copy(bytes(data), int(count)), spec)
-        result[(int(geoid), float(times))] = _rows(int(geoid), chunks, spec)
+    for (geoid, times), parts in blocks.items():
+        data = parts[0][1] if len(parts) == 1 else b"".join(d for _, d in parts)
+        chunks = from_copy(records_as_copy(data, sum(n for n, _ in parts)), spec)
+        result[(geoid, times)] = _rows(geoid, chunks, spec)
     return result
+
+
+#: :func:`instant_rows` sends an instant's chunks in blocks of 2**8 chunks (262,144 ids, about 10 MB)
+INSTANT_BLOCK_BITS = 8
 
 
 def upload_instants(
