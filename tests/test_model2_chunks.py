@@ -473,7 +473,9 @@ def test_the_client_transfers_chunks_bit_for_bit(conn: Conn, versioned: bool, mo
     assert _python_reads(conn, on_rows) == expected  # rows converted by the switch, read from chunks
     snapshots = sum(1 for k, v in expected.items() if k.startswith("get_at") and v is not None)
     assert snapshots == 14  # (none after the last instant: not alive)
-    assert reads.count("times_vrtx") == reads.count("times_trgl") == 1 + snapshots + 2  # fetch_series, surfaces_at
+    # each reader read both tables' chunks (fetch_series, the snapshots, surfaces_at; more when consistent_read
+    # read again because another transaction of the cluster completed meanwhile)
+    assert min(reads.count("times_vrtx"), reads.count("times_trgl")) >= 1 + snapshots + 2
     # the upload encodes the instants' chunks in the client: one COPY per table, no tgsis.insert_chunk_rows
     conn.execute("SET track_functions = 'all'")
     tgsis.fetch_series(conn, "horizons", on_rows)  # (a transaction is open: the upload runs in a savepoint of it)
