@@ -442,3 +442,21 @@ def test_server_refuses_what_breaks_the_copy_format(tx: psycopg.Connection[Any])
         )
         with tx.cursor().copy(query) as copy:
             copy.write(bytes(stream))
+
+
+def test_an_instant_key_is_written_bit_for_bit_after_the_object_key() -> None:
+    """Model 2's chunk tables are keyed (geoid, times, chunk): the COPY carries the instant's float8 bits."""
+    spec = ChunkColumns(("x", "y", "z"), instant=("times",))
+    assert spec.copy_columns() == ["geoid", "times", "chunk", "revision", "holes", "x", "y", "z"]
+    assert spec.select_columns() == XYZ.select_columns() == ["chunk", "holes", "x", "y", "z"]
+    chunks = encode(np.arange(3), {c: np.arange(3.0) for c in "xyz"}, spec)
+    stream = to_copy(chunks, 7, 5, (-0.0,))
+    # header (19 bytes), field count 8, geoid (length 8, 7), then the instant (length 8, -0.0's bits)
+    assert stream[19:21] == (8).to_bytes(2, "big")
+    assert stream[21:33] == (8).to_bytes(4, "big") + (7).to_bytes(8, "big")
+    assert stream[33:45] == (8).to_bytes(4, "big") + np.array([-0.0], dtype=">f8").tobytes()
+    assert stream[45:57] == (8).to_bytes(4, "big") + (0).to_bytes(8, "big")  # chunk 0
+    with pytest.raises(InvalidInputError, match="one value each"):
+        to_copy(chunks, 7, 5)
+    with pytest.raises(InvalidInputError):
+        ChunkColumns(("x", "times"), instant=("times",))

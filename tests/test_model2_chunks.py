@@ -47,6 +47,9 @@ def _series(conn: Conn, name: str = "horizons", times: tuple[float, ...] = TIMES
 
 
 def _class(conn: Conn, versioned: bool) -> None:
+    """The class ``horizons``, the time tables as rows whatever TGSIS_TEST_TIME_STORAGE made them (each test
+    switches them itself)."""
+    _store(conn, "rows")
     tgsis.create_feature_class(
         conn, "horizons", "SURFACE", time_model="INSTANTS", cell_properties=[("porosity", "float8")]
     )
@@ -357,3 +360,179 @@ def test_pg_dump_and_restore_keep_the_time_tables_in_chunks(pg: Any, db_dsn: str
         assert _answers(copy, geoid) == before
         _switch(copy, "rows")
         assert _answers(copy, geoid) == before
+
+
+# --------------------------------------------------------------------------- the client transfers model 2's chunks
+
+#: a NaN with a payload of its own (a property value: kept bit for bit)
+NAN_PAYLOAD = np.array([0x7FF8000000000123], dtype=np.int64).view(np.float64)[0]
+
+
+def _hostile_series(times: tuple[float, ...] = TIMES, side: int = 40) -> SurfaceSeries:
+    """A side x side curved grid (40: 2 vertex chunks, 3 triangle chunks) at ``times``, with -0.0, a subnormal, a
+    large coordinate, and property values NaN (with a payload) and -0.0."""
+    s = curved_surface(side)
+    surfaces = []
+    for i in range(len(times)):
+        vertices = s.vertices + i / 3.0
+        vertices[0] = (-0.0, -0.0, -0.0)
+        vertices[5, 2], vertices[7, 0] = 5e-324, 2.5e15
+        porosity = s.vertex_properties["porosity"].copy()
+        porosity[3], porosity[4] = NAN_PAYLOAD, -0.0
+        surfaces.append(tgsis.Surface(vertices, s.cells, vertex_properties={"porosity": porosity}))
+    return SurfaceSeries(np.asarray(times), surfaces)
+
+
+def _bits(values: Any) -> list[int]:
+    return np.ascontiguousarray(values, dtype=np.float64).view(np.int64).ravel().tolist()
+
+
+def _surface_bits(surface: tgsis.Surface | None) -> Any:
+    if surface is None:
+        return None
+    return (
+        _bits(surface.vertices),
+        surface.cells.tolist(),
+        sorted((k, _bits(v)) for k, v in surface.vertex_properties.items()),
+    )
+
+
+def _python_reads(conn: Conn, geoid: int) -> dict[str, Any]:
+    """What the Python readers of model 2 give of the feature, doubles by their bits."""
+    series = tgsis.fetch_series(conn, "horizons", geoid)
+    reads: dict[str, Any] = {
+        "times": _bits(series.times),
+        "surfaces": [_surface_bits(s) for s in series.surfaces],
+    }
+    for t in (-0.0, 0.3, 0.1 + 0.2, 1.0, 2.0, 5.0, 7.0, 8.0):
+        for convention in ("left", "right"):
+            reads[f"get_at {t} {convention}"] = _surface_bits(
+                tgsis.get_at(conn, geoid, t, convention=convention, properties=True)
+            )
+    reads["surfaces_at"] = {
+        t: [_surface_bits(s)[:2] for g, s in sorted(tgsis.surfaces_at(conn, "horizons", t).items()) if g == geoid]
+        for t in (0.3, 2.0)
+    }
+    conn.rollback()
+    return reads
+
+
+def _store(conn: Conn, to: str) -> None:
+    """The time tables in ``to`` (whatever TGSIS_TEST_TIME_STORAGE made them)."""
+    row = conn.execute("SELECT tgsis.stored_in_chunks('times_vrtx')").fetchone()
+    if (row == (True,)) != (to == "chunks"):
+        _switch(conn, to)
+
+
+def _edits(conn: Conn, geoid: int) -> None:
+    """psql edits through the faces that leave holes: a vertex far above the others (chunk 1's slots to it
+    holes), a triangle deleted; then an instant added from Python."""
+    conn.execute("INSERT INTO tgsis.times_vrtx VALUES (%s, 2.0, 2000, '-0'::float8, 1.5, 5e-324)", (geoid,))
+    conn.execute("DELETE FROM tgsis.times_trgl WHERE geoid = %s AND times = 2.0 AND trglid = 5", (geoid,))
+    conn.commit()
+    tgsis.add_instant(conn, "horizons", geoid, 7.0, _hostile_series().surfaces[1])
+    conn.commit()
+
+
+def _insert_chunk_rows_calls(conn: Conn) -> int:
+    row = conn.execute(
+        "SELECT coalesce(sum(calls), 0) FROM pg_stat_xact_user_functions WHERE funcname = 'insert_chunk_rows'"
+    ).fetchone()
+    assert row is not None
+    return int(row[0])
+
+
+@pytest.mark.parametrize("versioned", [False, True])
+def test_the_client_transfers_chunks_bit_for_bit(conn: Conn, versioned: bool, monkeypatch: Any) -> None:
+    import tgsis.db._chunk_transfer as chunk_transfer
+
+    _class(conn, versioned)
+    _store(conn, "rows")
+    on_rows = tgsis.insert_feature(conn, "horizons", _hostile_series())
+    conn.commit()
+    _edits(conn, on_rows)
+    expected = _python_reads(conn, on_rows)
+    assert expected["surfaces"][2][0][-3:] == _bits([-0.0, 1.5, 5e-324])  # the vertex far above the others
+    assert len(expected["surfaces"][2][1]) == len(curved_surface(40).cells) - 1
+
+    _store(conn, "chunks")
+    # the readers take the instants' chunks (decoded by the client), not the faces
+    reads: list[str] = []
+
+    def spy(real: Any) -> Any:
+        def instant_rows(connection: Conn, layout: Any, *args: Any, **kwargs: Any) -> Any:
+            reads.append(layout.table)
+            return real(connection, layout, *args, **kwargs)
+
+        return instant_rows
+
+    for module in ("tgsis.db.instants", "tgsis.db._temporal_common"):
+        monkeypatch.setattr(f"{module}.instant_rows", spy(chunk_transfer.instant_rows))
+    # an instant's chunks in several blocks (one chunk each), joined by the client
+    monkeypatch.setattr(chunk_transfer, "INSTANT_BLOCK_BITS", 0)
+    assert _python_reads(conn, on_rows) == expected  # rows converted by the switch, read from chunks
+    snapshots = sum(1 for k, v in expected.items() if k.startswith("get_at") and v is not None)
+    assert snapshots == 14  # (none after the last instant: not alive)
+    # each reader read both tables' chunks (fetch_series, the snapshots, surfaces_at; more when consistent_read
+    # read again because another transaction of the cluster completed meanwhile)
+    assert min(reads.count("times_vrtx"), reads.count("times_trgl")) >= 1 + snapshots + 2
+    # the upload encodes the instants' chunks in the client: one COPY per table, no tgsis.insert_chunk_rows
+    conn.execute("SET track_functions = 'all'")
+    tgsis.fetch_series(conn, "horizons", on_rows)  # (a transaction is open: the upload runs in a savepoint of it)
+    on_chunks = tgsis.insert_feature(conn, "horizons", _hostile_series())
+    assert _insert_chunk_rows_calls(conn) == 0
+    stored = conn.execute(
+        "SELECT float8send(times), chunk, revision, cardinality(x) FROM tgsis.times_vrtx_chunk WHERE geoid = %s "
+        "ORDER BY times, chunk",
+        (on_chunks,),
+    ).fetchall()
+    revision = 0 if not versioned else conn.execute("SELECT revision FROM tgsis.write_revision()").fetchone()[0]  # type: ignore[index]
+    assert stored == [(struct.pack(">d", t), k, revision, 1024 if k == 0 else 576) for t in TIMES for k in (0, 1)]
+    conn.commit()
+    conn.execute("SET track_functions = 'all'")
+    _edits(conn, on_chunks)
+    assert _python_reads(conn, on_chunks) == expected
+    # what the client encoded is what the server decodes: the faces give the same bits
+    faces = (
+        "SELECT float8send(times), vrtxid, float8send(x), float8send(y), float8send(z) FROM tgsis.times_vrtx "
+        "WHERE geoid = %s ORDER BY times, vrtxid"
+    )
+    triangles = "SELECT float8send(times), trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.times_trgl WHERE geoid = %s ORDER BY 1, 2"
+    assert conn.execute(faces, (on_chunks,)).fetchall() == conn.execute(faces, (on_rows,)).fetchall()
+    assert conn.execute(triangles, (on_chunks,)).fetchall() == conn.execute(triangles, (on_rows,)).fetchall()
+    conn.rollback()
+    # and back to rows: the chunks written by the client give the rows the rows' upload wrote
+    monkeypatch.undo()
+    _store(conn, "rows")
+    assert _python_reads(conn, on_chunks) == expected
+
+
+@pytest.mark.parametrize("versioned", [False, True])
+def test_an_instant_deleted_and_added_again_in_one_transaction(conn: Conn, versioned: bool) -> None:
+    _class(conn, versioned)
+    _store(conn, "chunks")
+    series = _hostile_series(side=12)  # (a delete through the face rewrites a chunk per row: small)
+    geoid = tgsis.insert_feature(conn, "horizons", series)
+    conn.commit()
+    if versioned:  # the instant's chunks of a saved revision: closed by the delete, kept
+        tgsis.save_revision(conn, "uploaded")
+        conn.commit()
+    conn.execute("SET track_functions = 'all'")
+    assert tgsis.delete_instant(conn, geoid, 2.0)
+    tgsis.add_instant(conn, "horizons", geoid, 2.0, series.surfaces[0])
+    left = conn.execute(
+        "SELECT count(*) FROM tgsis.times_vrtx_chunk WHERE geoid = %s AND times = 2.0", (geoid,)
+    ).fetchone()
+    # unversioned, the delete removed the instant's chunks: the client's chunks go in; versioned, the closed
+    # chunks of the saved revision stay (a new one's key would meet them): the server's writer takes the rows
+    assert (left, _insert_chunk_rows_calls(conn)) == (((2,), 2) if versioned else ((1,), 0))
+    conn.commit()
+    got = tgsis.fetch_series(conn, "horizons", geoid)
+    assert _bits(got.times) == _bits(TIMES)
+    assert [_surface_bits(s) for s in got.surfaces] == [
+        _surface_bits(s) for s in (series.surfaces[0], series.surfaces[1], series.surfaces[0])
+    ]
+    at = tgsis.get_at(conn, geoid, 2.0, properties=True)
+    assert _surface_bits(at) == _surface_bits(series.surfaces[0])
+    # a key visible already is still refused by name (the instant's row first: TG201)
+    assert sqlstate(conn, "SELECT tgsis.add_instant(%s, 2.0)", (geoid,))[0] == "TG201"

@@ -20,7 +20,7 @@ from psycopg import sql
 
 import tgsis
 from tests.temporal_data import evolving, series
-from tgsis.db import _transfer
+from tgsis.db import _chunk_transfer, _transfer
 from tgsis.db.copy import encode_rows
 from tgsis.errors import DatabaseError
 from tgsis.temporal import EvolvingSurface, TopologyPeriod
@@ -217,11 +217,17 @@ def test_a_snapshot_is_of_one_state_whatever_commits_between_its_reads(
     conn.commit()
     assert before is not None
     reads = []
-    packed = _transfer.packed_out
 
-    def read_then_commit_another_change(*args: Any, **kwargs: Any) -> Any:
-        result = packed(*args, **kwargs)
-        reads.append(1)
+    def read_then_commit_another_change(read: Any) -> Any:
+        def hooked(*args: Any, **kwargs: Any) -> Any:
+            result = read(*args, **kwargs)
+            reads.append(1)
+            after_a_read()
+            return result
+
+        return hooked
+
+    def after_a_read() -> None:
         if len(reads) == 1:  # the vertices are read: another session changes the rest
             with psycopg.connect(db_dsn) as other:
                 other.execute(
@@ -238,9 +244,12 @@ def test_a_snapshot_is_of_one_state_whatever_commits_between_its_reads(
                     ),
                     (fid,),
                 )
-        return result
 
-    monkeypatch.setattr(_temporal_common, "packed_out", read_then_commit_another_change)
+    monkeypatch.setattr(_temporal_common, "packed_out", read_then_commit_another_change(_transfer.packed_out))
+    # model 2 with its time tables in chunks (TGSIS_TEST_TIME_STORAGE=chunks) reads the instant's chunks
+    monkeypatch.setattr(
+        "tgsis.db._temporal_common.instant_rows", read_then_commit_another_change(_chunk_transfer.instant_rows)
+    )
     got = tgsis.get_at(conn, fid, 0.0, properties=True)
     conn.commit()
     assert len(reads) >= 2

@@ -95,6 +95,9 @@ class ChunkColumns:
         too (a value missing, not a hole: :attr:`ChunkSet.nulls`).
     key : str
         The chunk table's object key column (``geoid``; ``_geoid`` for a class's property table).
+    instant : tuple of str
+        The ``double precision`` key columns after ``key`` (``("times",)`` for model 2's time tables, keyed
+        ``(geoid, times, chunk)``); empty for the tables keyed by the object alone.
     """
 
     names: tuple[str, ...]
@@ -102,6 +105,7 @@ class ChunkColumns:
     integers: tuple[str, ...] = ()
     properties: tuple[tuple[str, str], ...] = ()
     key: str = "geoid"
+    instant: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         kinds = dict(self.properties)
@@ -109,6 +113,7 @@ class ChunkColumns:
         if (
             unknown
             or len(set(self.names)) != len(self.names)
+            or set(self.instant) & {*self.names, self.key}
             or set(self.refs) & set(self.integers)
             or set(kinds) & (set(self.refs) | set(self.integers))
             or len(kinds) != len(self.properties)
@@ -145,14 +150,25 @@ class ChunkColumns:
     def copy_columns(self) -> list[str]:
         """The columns a binary COPY of :func:`to_copy` fills, in its order (``lastrevs``, ``revclosed`` left out)."""
         wide = [f"{c}_wide" for c in self.ref_order]
-        return [self.key, "chunk", "revision", "holes", *(["vbase", "vtop"] if self.refs else []), *self.names, *wide]
+        return [
+            self.key,
+            *self.instant,
+            "chunk",
+            "revision",
+            "holes",
+            *(["vbase", "vtop"] if self.refs else []),
+            *self.names,
+            *wide,
+        ]
 
     def select_columns(self) -> list[str]:
         """The columns :func:`from_copy` parses, in its order: ``chunk, holes, [vbase,] arrays..., [wide...]``.
 
-        ``vtop`` (a bound the readers of the cells on given vertices filter by) is written, not read back.
+        ``vtop`` (a bound the readers of the cells on given vertices filter by) is written, not read back; the
+        keys (object, instant) and the revision are not read by the codec either.
         """
-        return [c for c in self.copy_columns()[1:2] + self.copy_columns()[3:] if c != "vtop"]
+        skipped = {self.key, *self.instant, "revision", "vtop"}
+        return [c for c in self.copy_columns() if c not in skipped]
 
 
 @dataclass(frozen=True)
@@ -495,7 +511,7 @@ def _array_field(body: bytes, kind: str, count: int, hasnull: bool) -> bytes:
     return header + body
 
 
-def to_copy(chunks: ChunkSet, geoid: int, revision: int = 0) -> bytes:
+def to_copy(chunks: ChunkSet, geoid: int, revision: int = 0, instant: tuple[float, ...] = ()) -> bytes:
     """The binary COPY stream of the chunk rows, columns :meth:`ChunkColumns.copy_columns`.
 
     Parameters
@@ -505,6 +521,14 @@ def to_copy(chunks: ChunkSet, geoid: int, revision: int = 0) -> bytes:
         The object's key.
     revision : int
         The revision that writes these chunks (0 for unversioned storage).
+    instant : tuple of float
+        The values of the ``double precision`` key columns (:attr:`ChunkColumns.instant`), one each, written bit
+        for bit (``-0.0`` stays ``-0.0``).
+
+    Raises
+    ------
+    InvalidInputError
+        ``instant`` does not give one value per instant key column.
 
     Returns
     -------
@@ -513,15 +537,21 @@ def to_copy(chunks: ChunkSet, geoid: int, revision: int = 0) -> bytes:
         header, one row per chunk, trailer.
     """
     spec = chunks.columns
+    if len(instant) != len(spec.instant):
+        raise InvalidInputError(f"chunk keys {list(spec.instant)} need one value each, got {list(instant)}")
     c = len(chunks.chunk)
     offsets = chunks.offsets
     n_fields = len(spec.copy_columns())
-    head = np.empty(
-        c, dtype=[("nf", ">i2"), ("lg", ">i4"), ("g", ">i8"), ("lc", ">i4"), ("c", ">i8"), ("lr", ">i4"), ("r", ">i4")]
-    )
+    times = [(f"lt{i}", ">i4") for i in range(len(instant))], [(f"t{i}", ">f8") for i in range(len(instant))]
+    layout = [("nf", ">i2"), ("lg", ">i4"), ("g", ">i8")]
+    layout += [field for pair in zip(*times) for field in pair]
+    layout += [("lc", ">i4"), ("c", ">i8"), ("lr", ">i4"), ("r", ">i4")]
+    head = np.empty(c, dtype=layout)
     head["nf"], head["lg"], head["g"], head["lc"], head["c"] = n_fields, 8, geoid, 8, chunks.chunk
+    for i, value in enumerate(instant):
+        head[f"lt{i}"], head[f"t{i}"] = 8, value  # float64 into >f8: the bits kept
     head["lr"], head["r"] = 4, revision
-    heads = head.view(np.uint8).reshape(c, -1) if c else np.empty((0, 30), dtype=np.uint8)
+    heads = head.view(np.uint8).reshape(c, -1) if c else np.empty((0, head.itemsize), dtype=np.uint8)
 
     has_holes = np.logical_not(np.logical_and.reduceat(chunks.present, offsets[:-1])) if c else np.empty(0, bool)
     vtop = chunks.vtop if len(chunks.vtop) == c or not spec.refs else _bound_of(chunks)

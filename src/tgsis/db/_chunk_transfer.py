@@ -57,6 +57,9 @@ __all__ = [
     "chunk_copy_query",
     "split_copy",
     "split_first_field",
+    "instant_layout",
+    "instant_rows",
+    "upload_instants",
 ]
 
 Conn = psycopg.Connection[Any]
@@ -141,15 +144,22 @@ def chunked_tables(conn: Conn) -> frozenset[str]:
     return frozenset(str(r[0]) for r in rows)
 
 
-def chunk_table(conn: Conn, table: str) -> ChunkTable:
+def chunk_table(conn: Conn, table: str, *, instants: bool = False) -> ChunkTable:
     """The chunk table of ``tgsis.<table>``, read from the catalog (any role may read it).
+
+    Parameters
+    ----------
+    instants : bool
+        Expect model 2's key ``geoid, times, chunk`` (``times_vrtx``, ``times_trgl``: :func:`instant_rows`,
+        :func:`upload_instants`) instead of model 1's ``geoid, chunk``.
 
     Raises
     ------
     NotFoundError
         ``tgsis.<table>_chunk`` does not exist (TG200).
     InvalidInputError
-        Its layout is not the one this client encodes (key ``geoid, chunk``, 1,024 ids per chunk).
+        Its layout is not the one this client encodes (key ``geoid, chunk``, or ``geoid, times, chunk`` with
+        ``instants``; 1,024 ids per chunk).
     """
     row = conn.execute(
         "SELECT to_regclass(format('tgsis.%%I', %s::text || '_chunk'))::oid, "
@@ -173,16 +183,19 @@ def chunk_table(conn: Conn, table: str) -> ChunkTable:
     keys = names[: names.index("revision")] if "revision" in names else names
     arrays = [(n, t) for n, t in attributes if n not in keys and n not in _FIXED and not n.endswith("_wide")]
     refs = tuple(n for n, t in arrays if t == "integer[]")
+    instant = ("times",) if instants else ()
     if (
-        keys != ["geoid", "chunk"]
+        keys != ["geoid", *instant, "chunk"]
         or size != CHUNK_SIZE
         or any(t not in ("integer[]", "double precision[]") for _, t in arrays)
     ):
         raise InvalidInputError(
-            f"tgsis.{table}_chunk is not a model-1 chunk table of {CHUNK_SIZE} ids per chunk",
+            f"tgsis.{table}_chunk is not a {'model-2' if instants else 'model-1'} chunk table of {CHUNK_SIZE} ids "
+            "per chunk",
             detail=f"key {keys}, chunk size {size}, arrays {arrays}",
         )
-    return ChunkTable(table, ChunkColumns(tuple(n for n, _ in arrays), refs=refs), bool(versioned), bool(readable))
+    spec = ChunkColumns(tuple(n for n, _ in arrays), refs=refs, instant=instant)
+    return ChunkTable(table, spec, bool(versioned), bool(readable))
 
 
 def upload_chunks(conn: Conn, table: str, objects: Sequence[ObjectRows], storage: Storage | None = None) -> int:
@@ -658,3 +671,173 @@ def records_as_copy(data: bytes, count: int) -> bytes:
         raise InvalidInputError(f"{len(view) - pos} bytes after {count} chunk records")
     out.append(b"\xff\xff")
     return b"".join(out)
+
+
+# --------------------------------------------------------------------------- model 2's time tables (geoid, times, chunk)
+
+
+def instant_layout(conn: Conn, table: str, chunked: frozenset[str]) -> ChunkTable | None:
+    """The chunk table of model 2's ``tgsis.<table>`` (``times_vrtx``, ``times_trgl``) when its rows are read from it.
+
+    Parameters
+    ----------
+    chunked : frozenset of str
+        :func:`chunked_tables`.
+
+    Returns
+    -------
+    ChunkTable or None
+        None while the table is stored as rows, or for a role that may read the face but not the chunk
+        table (it reads through the face, decoded by the server, what it read before).
+    """
+    if table not in chunked:
+        return None
+    layout = chunk_table(conn, table, instants=True)
+    return layout if layout.readable else None
+
+
+def instant_rows(
+    conn: Conn, layout: ChunkTable, geoids: Sequence[int], instant: sql.Composable | None = None
+) -> dict[tuple[int, float], ObjectRows]:
+    """The rows of model 2's ``tgsis.<table>`` of objects ``geoids`` at their instants, from the chunks the session sees.
+
+    One query: per object and instant the server joins the visible chunk versions' ``record_send`` values
+    (the versioned views' test, :func:`_visible`; every chunk of unversioned storage) into one ``bytea``,
+    decoded here (:func:`records_as_copy`, :func:`~tgsis._chunks.from_copy`), as model 1's download
+    (:class:`PackedChunks`). Read with the role's rights (grants, row-level security). The instants come
+    in binary (their bits); no value travels as text.
+
+    Parameters
+    ----------
+    layout : ChunkTable
+        :func:`instant_layout`.
+    geoids : sequence of int
+    instant : sql.Composable, optional
+        An SQL expression of the one instant read per object, in terms of the object's ``f.geoid`` (e.g.
+        ``tgsis.instant_at(f.geoid, t, convention)``: the snapshot's instant, chosen in the same query);
+        None: every instant.
+
+    Returns
+    -------
+    dict of (int, float) to ObjectRows
+        Per object and instant with chunks (the instant as the chunks store it): ids ascending, the columns
+        in id order. An instant with no visible chunk is not in it.
+
+    Raises
+    ------
+    InvalidInputError
+        Chunks that break the contract (the codec refuses them).
+    """
+    spec = layout.columns
+    record = sql.SQL("record_send(ROW({}))").format(
+        sql.SQL(", ").join(sql.SQL("c.{}").format(sql.Identifier(c)) for c in spec.select_columns())
+    )
+    at = sql.SQL("") if instant is None else sql.SQL(" AND c.times = {}").format(instant)
+    # grouped by blocks of chunks too: a bytea holds 1 GB at most, and array_send writes 4 bytes per element
+    # more (a 40M-triangle instant in one value would pass it); the client joins an instant's blocks
+    query = sql.SQL(
+        "SELECT f.geoid, a.times, a.n, a.v FROM unnest({geoids}::int8[]) AS f(geoid) "
+        "CROSS JOIN LATERAL (SELECT c.times, count(*) AS n, string_agg({record}, ''::bytea) AS v FROM {source} c "
+        "WHERE c.geoid = f.geoid{at} AND {visible} GROUP BY c.times, c.chunk >> {bits}) a"
+    ).format(
+        geoids=sql.Literal(list(dict.fromkeys(int(g) for g in geoids))),
+        record=record,
+        source=layout.relation,
+        at=at,
+        visible=_visible(layout),
+        bits=sql.Literal(INSTANT_BLOCK_BITS),
+    )
+    with conn.cursor(binary=True) as cursor:
+        groups = cursor.execute(query).fetchall()
+    blocks: dict[tuple[int, float], list[tuple[int, bytes]]] = {}
+    for geoid, times, count, data in groups:  # (an instant's -0.0 and 0.0 are one key, as the face groups them)
+        blocks.setdefault((int(geoid), float(times)), []).append((int(count), bytes(data)))
+    result: dict[tuple[int, float], ObjectRows] = {}
+    for (geoid, times), parts in blocks.items():
+        data = parts[0][1] if len(parts) == 1 else b"".join(d for _, d in parts)
+        chunks = from_copy(records_as_copy(data, sum(n for n, _ in parts)), spec)
+        result[(geoid, times)] = _rows(geoid, chunks, spec)
+    return result
+
+
+#: :func:`instant_rows` sends an instant's chunks in blocks of 2**8 chunks (262,144 ids, about 10 MB)
+INSTANT_BLOCK_BITS = 8
+
+
+def upload_instants(
+    conn: Conn,
+    table: str,
+    geoid: int,
+    times: Sequence[float],
+    counts: Sequence[int],
+    columns: Mapping[str, npt.NDArray[Any]],
+    storage: Storage,
+) -> bool:
+    """Write new instants' rows of model 2's ``tgsis.<table>`` as chunk rows encoded here: one binary COPY.
+
+    The model-2 upload (``insert_series``, ``add_instant``) of a time table stored in chunks, as model 1's
+    :func:`upload_chunks`: the rows of instant ``times[i]`` are ``counts[i]`` consecutive rows of
+    ``columns`` with ids ``0..counts[i]-1``; each instant's chunks are encoded by numpy with the instant's
+    bits as key and COPied into ``tgsis.<table>_chunk`` in the session's working revision (0 for
+    unversioned storage and features of classes without versioning) as the role (the chunk table's grants
+    and row-level security: the class's right; its insert trigger checks the encoding and, unversioned,
+    revision 0), after the checks ``tgsis.insert_chunk_rows`` makes of an existing object: not locked by
+    another version (TG303), its write lock taken (no face writer of it in flight). The object is noted
+    as changed in the working revision.
+
+    Returns
+    -------
+    bool
+        False, with nothing written, when the chunk table holds chunks of one of these instants of the
+        object already (in any version or revision, of these bits or others): the caller then writes
+        through ``tgsis.insert_chunk_rows`` (:meth:`Storage.copy`), which refuses a visible key (23505),
+        a key of other bits (TG100), and rewrites a chunk of the working revision in place.
+
+    Raises
+    ------
+    InvalidInputError
+        Columns that are not the table's, or values the codec refuses (nothing is sent).
+    NotVersionedError, ReadOnlyRevisionError
+        The session may not write here.
+    psycopg.errors.InsufficientPrivilege
+        The role lacks INSERT on the chunk table, or the class's right.
+    """
+    layout = chunk_table(conn, table, instants=True)
+    if sorted(columns) != sorted(layout.columns.names):
+        raise InvalidInputError(
+            f"tgsis.{table}: an upload gives the columns {sorted(layout.columns.names)}, not {sorted(columns)}"
+        )
+    storage.check("tgsis", table)
+    versioned = ("tgsis", table) in storage.versioned
+    revision = int(storage.revision or 0) if versioned else 0
+    starts = np.cumsum([0, *counts]).tolist()
+    encoded = [  # encode first: bad input is refused before anything is sent
+        encode(np.arange(n, dtype=np.int64), {k: v[start : start + n] for k, v in columns.items()}, layout.columns)
+        for start, n in zip(starts, counts)
+    ]
+    instants = [float(t) for t in times]
+    if not instants:
+        return True
+    keys = [str(int(geoid))]
+    if versioned:
+        conn.execute("SELECT tgsis.check_objects_unlocked('feature', %s::text[])", (keys,))  # TG303
+    conn.execute("SELECT tgsis.object_write_lock('feature', %s::text[])", (keys,))  # no face writer of it in flight
+    existing = conn.execute(  # (the instants' bits in binary: never through text)
+        sql.SQL("SELECT EXISTS (SELECT FROM {} c WHERE c.geoid = %s AND c.times = ANY (%b::float8[]))").format(
+            layout.relation
+        ),
+        (int(geoid), instants),
+    ).fetchone()
+    if existing is None or existing[0]:
+        return False
+    names = layout.columns.copy_columns()
+    statement = sql.SQL("COPY {} ({}) FROM STDIN (FORMAT binary)")
+    with staged(conn, layout.relation, names) as into:
+        with conn.cursor().copy(statement.format(into, sql.SQL(", ").join(map(sql.Identifier, names)))) as copy:
+            for k, (chunks, t) in enumerate(zip(encoded, instants)):
+                stream = to_copy(chunks, int(geoid), revision, (t,))
+                # one stream: the header once, the trailer once
+                copy.write(memoryview(stream)[19 if k else 0 : -2 if k < len(encoded) - 1 else None])
+    if layout.versioned and revision != 0:
+        conn.execute("SELECT tgsis.record_changed_objects('tgsis', %s, %s::text[])", (table, keys))
+    return True

@@ -21,6 +21,7 @@ from psycopg import sql
 
 from tgsis._series import check_time
 from tgsis.arguments import checked, no_nul
+from tgsis.db._chunk_transfer import chunked_tables, instant_layout, instant_rows
 from tgsis.db._transfer import (
     SEND_FUNCTIONS,
     consistent_read,
@@ -223,6 +224,42 @@ def assemble_surface(
     return Surface(vertices, cells, name=name)
 
 
+def instant_snapshot(
+    conn: Conn,
+    table: str,
+    geoids: Sequence[int],
+    t: sql.Composable,
+    convention: sql.Composable,
+    columns: Sequence[str],
+) -> list[npt.NDArray[Any]] | None:
+    """Model 2's rows of ``tgsis.<table>`` at t of features ``geoids`` from the time table's chunks, decoded here.
+
+    The instant of each feature is chosen by the server in the same query (``tgsis.instant_at``, as
+    ``tgsis.vertices_at`` chooses it): never passed as text. ``columns``: the local id, then arrays.
+
+    Returns
+    -------
+    list of ndarray or None
+        ``[geoid, id, *columns]`` (n,) each, ordered by (geoid, id); None while the table is stored as rows
+        (or the role may read the face only): the caller reads the face.
+    """
+    layout = instant_layout(conn, table, chunked_tables(conn))
+    if layout is None:
+        return None
+    rows = instant_rows(conn, layout, geoids, sql.SQL("tgsis.instant_at(f.geoid, {}, {})").format(t, convention))
+    keys = sorted(rows)
+    counts = [len(rows[k].ids) for k in keys]
+    names = columns[1:]
+    return [
+        np.repeat(np.asarray([k[0] for k in keys], dtype=np.int64), counts),
+        np.concatenate([np.empty(0, dtype=np.int64), *(rows[k].ids for k in keys)]),
+        *(
+            np.concatenate([np.empty(0, dtype=layout.columns.dtype(c)), *(rows[k].columns[c] for k in keys)])
+            for c in names
+        ),
+    ]
+
+
 def time_args(t: float, convention: str) -> tuple[sql.Literal, sql.Literal]:
     return sql.Literal(check_time(t)), sql.Literal(check_convention(convention))
 
@@ -311,9 +348,9 @@ def get_at(
     def read() -> Surface | None:
         """The surface and its properties of one state (:func:`consistent_read`)."""
         row = conn.execute(
-            sql.SQL("SELECT tgsis.exists_at(%s, {}, {}), geoname, geotype FROM tgsis.geometry WHERE geoid = %s").format(
-                t_lit, c_lit
-            ),
+            sql.SQL(
+                "SELECT tgsis.exists_at(%s, {}, {}), geoname, geotype, timemodel FROM tgsis.geometry WHERE geoid = %s"
+            ).format(t_lit, c_lit),
             (feature_id, feature_id),
         ).fetchone()
         if row is None:
@@ -322,25 +359,47 @@ def get_at(
             raise InvalidInputError(f"feature {feature_id} is a {row[2]}, not a surface")
         if not row[0]:
             return None
+        instants = row[3] == "INSTANTS"
+        # model 2 with its time tables in chunks: the instant's chunks, decoded here (no row built on the server)
+        vertices = (
+            instant_snapshot(conn, "times_vrtx", [feature_id], t_lit, c_lit, ["vrtxid", "x", "y", "z"])
+            if instants
+            else None
+        )
+        triangles = (
+            instant_snapshot(
+                conn, "times_trgl", [feature_id], t_lit, c_lit, ["trglid", "vrtxid1", "vrtxid2", "vrtxid3"]
+            )
+            if instants
+            else None
+        )
         with _without_jit(conn):
             # packed by the server in groups of 1,024 ids (packed_out): a COPY message per row
             # cost most of the snapshot's time
-            ids, x, y, z = packed_out(
-                conn,
-                sql.SQL("SELECT vrtxid, x, y, z FROM tgsis.vertices_at({}, {}, {})").format(
-                    sql.Literal(feature_id), t_lit, c_lit
-                ),
-                [("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")],
-                ["vrtxid"],
+            ids, x, y, z = (
+                vertices[1:]
+                if vertices is not None
+                else packed_out(
+                    conn,
+                    sql.SQL("SELECT vrtxid, x, y, z FROM tgsis.vertices_at({}, {}, {})").format(
+                        sql.Literal(feature_id), t_lit, c_lit
+                    ),
+                    [("vrtxid", "int8"), ("x", "float8"), ("y", "float8"), ("z", "float8")],
+                    ["vrtxid"],
+                )
             )
             # ordered by trglid here, not by the server: the rows come in no order
-            tid, a, b, c = packed_out(
-                conn,
-                sql.SQL("SELECT trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.triangles_at({}, {}, {})").format(
-                    sql.Literal(feature_id), t_lit, c_lit
-                ),
-                [("trglid", "int8"), ("vrtxid1", "int8"), ("vrtxid2", "int8"), ("vrtxid3", "int8")],
-                ["trglid"],
+            tid, a, b, c = (
+                triangles[1:]
+                if triangles is not None
+                else packed_out(
+                    conn,
+                    sql.SQL("SELECT trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.triangles_at({}, {}, {})").format(
+                        sql.Literal(feature_id), t_lit, c_lit
+                    ),
+                    [("trglid", "int8"), ("vrtxid1", "int8"), ("vrtxid2", "int8"), ("vrtxid3", "int8")],
+                    ["trglid"],
+                )
             )
         order = rows_by_geoid(tid, tid, [feature_id])[feature_id]
         surface = assemble_surface(feature_id, ids, (x, y, z), (a[order], b[order], c[order]), row[1])

@@ -24,6 +24,7 @@ from psycopg import sql
 from tgsis import datamodels
 from tgsis._zpositive import elevation, z_convention
 from tgsis.arguments import checked
+from tgsis.db._chunk_transfer import ObjectRows, chunked_tables, instant_layout, instant_rows, upload_instants
 from tgsis.db._cube import cube_name
 from tgsis.db._temporal_common import (
     Conn,
@@ -94,30 +95,38 @@ def _copy_instants(
     geoids_t = np.full(sum(m), geoid, dtype=np.int64)
     xyz = concat([s.vertices for s in surfaces])
     tri = concat([s.cells for s in surfaces])
-    storage.copy(
-        conn,
-        "tgsis",
-        "times_vrtx",
-        [
-            ("geoid", geoids_v, "int8"),
-            ("times", np.repeat(np.asarray(times, dtype=np.float64), n), "float8"),
-            ("vrtxid", vertex_ids, "int8"),
-            ("x", xyz[:, 0], "float8"),
-            ("y", xyz[:, 1], "float8"),
-            ("z", xyz[:, 2], "float8"),
-        ],
-    )
-    storage.copy(
-        conn,
-        "tgsis",
-        "times_trgl",
-        [
-            ("geoid", geoids_t, "int8"),
-            ("times", np.repeat(np.asarray(times, dtype=np.float64), m), "float8"),
-            ("trglid", triangle_ids, "int8"),
-            *((f"vrtxid{j + 1}", tri[:, j], "int8") for j in range(3)),
-        ],
-    )
+    vertex_columns = {"x": xyz[:, 0], "y": xyz[:, 1], "z": xyz[:, 2]}
+    # a time table stored in chunks takes the instants' chunks encoded here (one COPY), unless it holds chunks of
+    # these instants already (a delete and add again in one revision: tgsis.insert_chunk_rows then)
+    if ("tgsis", "times_vrtx") not in storage.chunked or not upload_instants(
+        conn, "times_vrtx", geoid, times, n, vertex_columns, storage
+    ):
+        storage.copy(
+            conn,
+            "tgsis",
+            "times_vrtx",
+            [
+                ("geoid", geoids_v, "int8"),
+                ("times", np.repeat(np.asarray(times, dtype=np.float64), n), "float8"),
+                ("vrtxid", vertex_ids, "int8"),
+                *((name, values, "float8") for name, values in vertex_columns.items()),
+            ],
+        )
+    triangle_columns = {f"vrtxid{j + 1}": tri[:, j] for j in range(3)}
+    if ("tgsis", "times_trgl") not in storage.chunked or not upload_instants(
+        conn, "times_trgl", geoid, times, m, triangle_columns, storage
+    ):
+        storage.copy(
+            conn,
+            "tgsis",
+            "times_trgl",
+            [
+                ("geoid", geoids_t, "int8"),
+                ("times", np.repeat(np.asarray(times, dtype=np.float64), m), "float8"),
+                ("trglid", triangle_ids, "int8"),
+                *((name, values, "int8") for name, values in triangle_columns.items()),
+            ],
+        )
     if fc.cell_properties:
         counts = n if fc.alignment == "VERTEX" else m
         idx = _local_ids(counts)
@@ -261,6 +270,33 @@ def delete_instant(conn: Conn, feature_id: int, t: float) -> bool:
     return bool(row and row[0])
 
 
+def _instant_arrays(
+    rows: Mapping[tuple[int, float], ObjectRows], columns: Sequence[str], dtypes: Sequence[Any]
+) -> list[npt.NDArray[Any]]:
+    """``[times, ids, *columns]`` (n,) each of one object's instants read from chunks, ordered by (times, id)."""
+    keys = sorted(rows, key=lambda k: k[1])
+    counts = [len(rows[k].ids) for k in keys]
+    times = np.repeat(np.asarray([k[1] for k in keys], dtype=np.float64), counts)
+    ids = np.concatenate([np.empty(0, dtype=np.int64), *(rows[k].ids for k in keys)])
+    values = [
+        np.concatenate([np.empty(0, dtype=dtype), *(rows[k].columns[c] for k in keys)])
+        for c, dtype in zip(columns, dtypes)
+    ]
+    return [times, ids, *values]
+
+
+def _instants_read(
+    conn: Conn, table: str, geoid: int, chunked: frozenset[str], columns: Sequence[str], types: Sequence[str]
+) -> list[npt.NDArray[Any]]:
+    """Every instant's rows of ``tgsis.<table>`` of one feature, ``[times, id, *columns]`` ordered by (times, id):
+    from its chunks, decoded here, when the time table is stored in them; else its rows, packed by the server."""
+    layout = instant_layout(conn, table, chunked)
+    if layout is not None:
+        names = columns[1:]
+        return _instant_arrays(instant_rows(conn, layout, [geoid]), names, [layout.columns.dtype(c) for c in names])
+    return ordered_copy(conn, tgsis_table(table), ["times", *columns], ["float8", *types], geoid, keys=2)
+
+
 @checked
 def fetch_series(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> SurfaceSeries:
     """A model-2 feature as a :class:`~tgsis.temporal.SurfaceSeries`, with its cell and per-instant properties.
@@ -285,21 +321,17 @@ def fetch_series(conn: Conn, feature_class: str | FeatureClass, feature_id: int)
         if row is None:
             raise NotFoundError(f"feature {feature_id} of class {fc.name} does not exist")
         (times,) = ordered_copy(conn, tgsis_table("times"), ["times"], ["float8"], feature_id)
-        vt, vid, x, y, z = ordered_copy(
-            conn,
-            tgsis_table("times_vrtx"),
-            ["times", "vrtxid", "x", "y", "z"],
-            ["float8", "int8", "float8", "float8", "float8"],
-            feature_id,
-            keys=2,
+        chunked = chunked_tables(conn)
+        vt, vid, x, y, z = _instants_read(
+            conn, "times_vrtx", feature_id, chunked, ["vrtxid", "x", "y", "z"], ["int8", "float8", "float8", "float8"]
         )
-        tt, tid, a, b, c = ordered_copy(
+        tt, tid, a, b, c = _instants_read(
             conn,
-            tgsis_table("times_trgl"),
-            ["times", "trglid", "vrtxid1", "vrtxid2", "vrtxid3"],
-            ["float8", "int8", "int8", "int8", "int8"],
+            "times_trgl",
             feature_id,
-            keys=2,
+            chunked,
+            ["trglid", "vrtxid1", "vrtxid2", "vrtxid3"],
+            ["int8", "int8", "int8", "int8"],
         )
         props = (
             ordered_copy(
