@@ -14,6 +14,7 @@
 -- Under READ COMMITTED a statement's snapshot is taken after the lock it
 -- waited for, and a transaction's own rewrite is in its snapshot: nothing is
 -- refused. Other changes (GRANT, a rename) keep the file and refuse nothing.
+-- The test is tgsis.chunk_snapshot_guard's (which the faces' reads run too).
 -- Runs with the writer's rights (pg_class and pg_relation_filenode are
 -- everyone's).
 CREATE FUNCTION tgsis.chunk_snapshot_check()
@@ -22,20 +23,9 @@ LANGUAGE plpgsql
 VOLATILE
 SET search_path = pg_catalog, pg_temp
 AS $$
-DECLARE
-    v_chunk regclass := TG_ARGV[0]::regclass;
 BEGIN
-    -- the table itself, or its partitions (tgsis.partition_chunk_storage); a partitioned parent has no file
-    IF EXISTS (SELECT FROM (SELECT v_chunk::oid AS relid UNION SELECT t.relid FROM pg_partition_tree(v_chunk) t) r
-                 LEFT JOIN pg_class c ON c.oid = r.relid   -- (read with the transaction's snapshot)
-                WHERE pg_relation_filenode(r.relid) IS NOT NULL
-                  AND c.relfilenode IS DISTINCT FROM pg_relation_filenode(r.relid)) THEN
-        RAISE EXCEPTION 'could not serialize access: % was rewritten after this transaction''s snapshot', v_chunk
-            USING ERRCODE = 'serialization_failure',
-                  DETAIL = format('%s.%s is stored in %s, which a transaction that committed after this one took its snapshot rewrote (a property added): this snapshot sees it empty.',
-                                  TG_TABLE_SCHEMA, TG_TABLE_NAME, v_chunk),
-                  HINT = 'retry the transaction';
-    END IF;
+    -- the table or one of its partitions rewritten (or made) after the snapshot: 40001 (tgsis.chunk_snapshot_guard)
+    PERFORM tgsis.chunk_snapshot_guard(TG_ARGV[0]::regclass);
     RETURN NULL;
 END
 $$;
