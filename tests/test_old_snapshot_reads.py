@@ -120,6 +120,30 @@ def test_an_add_property_in_chunks_keeps_an_older_snapshot_reading_every_row(
     assert row == ((n, n, 9, 9) if add == "default" else (n, 0, None, None))
 
 
+@pytest.mark.parametrize("relation", ["layer_cellpros", "layer_cellpros_chunk_rows"], ids=["face", "chunk view"])
+@pytest.mark.parametrize("add", sorted(ADDS))
+def test_an_older_snapshot_reading_the_added_property_gets_40001_not_null(
+    db_dsn: str, conn: Conn, add: str, relation: str
+) -> None:
+    """The chunk versions that snapshot sees have no array for the new property (NULL): naming it is refused,
+    where it would read NULL instead of the default every newer snapshot reads; the other columns read."""
+    _, n, total = _class_in_chunks(conn, False, collection=add == "no default")
+    conn.execute("SELECT tgsis.store_class_in_chunks('layer')")
+    conn.commit()
+    reader = _old_snapshot(db_dsn)
+    conn.execute(ADDS[add])
+    conn.commit()
+    got, state = _state(reader, lambda: reader.execute(f"SELECT count(grade) FROM public.{relation}").fetchone())
+    assert state == "40001", (got, state)
+    reader.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ")  # the retry, after the add
+    assert reader.execute(f"SELECT count(*), count(grade), sum(porosity) FROM public.{relation}").fetchone() == (
+        n,
+        n if add == "default" else 0,
+        pytest.approx(total),
+    )
+    reader.close()
+
+
 SWITCHES = {"into chunks": "store_class_in_chunks", "back into rows": "store_class_in_rows"}
 
 #: Left open (docs/storage.md): the way back into rows makes a plain table, which cannot refuse a snapshot older
