@@ -45,6 +45,8 @@ _NAMED_IN_DOCS = frozenset(
         "checked_operator",
         "checked_time",
         "checkout_revision",
+        "chunk_array_missing",
+        "chunk_snapshot_guard",
         "claim_unversioned_geoid",
         "class_denied_geoids",
         "class_property_periods",

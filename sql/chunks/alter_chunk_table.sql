@@ -17,10 +17,13 @@
 --    TG202 naming them), nothing changed; the face's grants are kept.
 -- 3. the chunk table, matched to the shape by column number: a new column is
 --    a new array of the property's type (compression as tgsis.create_chunk_table
---    chooses it), filled in one rewrite of the table (ALTER ... USING, no row
---    trigger) with the column's default at every present slot and NULL at every
---    hole (tgsis.chunk_filled: the contract's encoding; NULL everywhere when
---    there is no default), in every chunk version; a renamed column is renamed;
+--    chooses it), added without a default (no rewrite of the table: a rewrite
+--    is not MVCC-safe, an older REPEATABLE READ snapshot would read the table
+--    empty) and filled by one UPDATE of every chunk version (MVCC: an older
+--    snapshot keeps reading the versions it saw, the new array NULL there) with
+--    the column's default at every present slot and NULL at every hole
+--    (tgsis.chunk_filled: the contract's encoding; NULL everywhere when there
+--    is no default); a renamed column is renamed;
 --    a dropped one dropped. Other arrays are not touched (bit for bit).
 -- 4. the chunk view and the face made again (tgsis.create_chunk_view,
 --    tgsis.create_chunk_face: columns, comments, triggers, the versioned
@@ -98,13 +101,13 @@ BEGIN
                  FROM pg_attribute a
                 WHERE a.attrelid = v_shape AND a.attnum > 0 AND NOT a.attisdropped AND v_new ? a.attnum::text
                 ORDER BY a.attnum LOOP
+        -- no default, no rewrite: only the catalog changes (a rewrite would show an older snapshot the table empty)
         EXECUTE format('ALTER TABLE %s ADD COLUMN %I %s[] COMPRESSION %s', v_chunk, v_c.attname, v_c.typename,
                        CASE WHEN v_c.atttypid = 'double precision'::regtype THEN v_float ELSE 'pglz' END);
-        EXECUTE format('ALTER TABLE %s ALTER COLUMN %I TYPE %s[] USING tgsis.chunk_filled((%s)::%s, %s, holes)', v_chunk,
-                       v_c.attname, v_c.typename, coalesce(v_c.def, 'NULL'), v_c.typename, v_len);
-        -- (a change of type forgets the column's compression: set again)
-        EXECUTE format('ALTER TABLE %s ALTER COLUMN %I SET COMPRESSION %s', v_chunk, v_c.attname,
-                       CASE WHEN v_c.atttypid = 'double precision'::regtype THEN v_float ELSE 'pglz' END);
+        -- filled by an UPDATE (MVCC: an older snapshot reads the chunk versions it saw, the new array NULL there);
+        -- the other arrays' TOAST values are not copied (an unchanged external value keeps its pointer)
+        EXECUTE format('UPDATE %s SET %I = tgsis.chunk_filled((%s)::%s, %s, holes)', v_chunk,
+                       v_c.attname, coalesce(v_c.def, 'NULL'), v_c.typename, v_len);
         EXECUTE format('COMMENT ON COLUMN %s.%I IS %L', v_chunk, v_c.attname,
                        format('%s per slot (NULL: no value, or a hole when holes lists the slot)',
                               coalesce(col_description(v_shape, (SELECT a.attnum FROM pg_attribute a

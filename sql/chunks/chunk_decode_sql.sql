@@ -12,6 +12,10 @@
 -- ordinality and the unnested columns are read as u.<name> and u.o. A
 -- class's property table (columns of role 'value', tgsis.chunk_columns) may
 -- hold NULL values: there a slot is present when holes does not list it.
+-- Such a column's whole array NULL is seen only by a snapshot older than an
+-- added property's fill (tgsis.alter_chunk_table adds it without a rewrite,
+-- then UPDATEs it): reading that column gives 40001
+-- (tgsis.chunk_array_missing), not NULL where new snapshots read the default.
 CREATE FUNCTION tgsis.chunk_decode_sql(p_table text, p_alias text)
 RETURNS TABLE (select_list text, arrays text, aliases text, present text)
 LANGUAGE plpgsql
@@ -38,7 +42,12 @@ BEGIN
         ELSIF v_c.role IN ('float', 'value') THEN
             v_arrays := v_arrays || format('%s.%I', v_a, v_c.name);
             v_alias := v_alias || quote_ident(v_c.name);
-            v_select := v_select || format('u.%I', v_c.name);
+            -- a NULL array: a snapshot older than an added property's fill (tgsis.alter_chunk_table) reads 40001 for it
+            v_select := v_select || CASE WHEN v_c.role = 'value'
+                                         THEN format('CASE WHEN %s.%I IS NULL THEN tgsis.chunk_array_missing(%L, %L, u.%I) '
+                                                     'ELSE u.%I END AS %I', v_a, v_c.name, p_table, v_c.name, v_c.name,
+                                                     v_c.name, v_c.name)
+                                         ELSE format('u.%I', v_c.name) END;
             v_first := coalesce(v_first, CASE WHEN v_c.role = 'float' THEN format('u.%I IS NOT NULL', v_c.name)
                                               ELSE format('NOT coalesce(u.o = ANY (%s.holes), false)', v_a) END);
         ELSE

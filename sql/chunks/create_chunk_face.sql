@@ -18,7 +18,8 @@
 -- tgsis.chunk_snapshot_check (40001 for a snapshot older than the chunk
 -- table's last rewrite, which it sees empty), and for versioned storage the
 -- write right's statement check (tgsis.view_write_check) as today's views
--- have it.
+-- have it. Reads: once per query tgsis.chunk_snapshot_guard (40001 for a
+-- snapshot older than the chunk table's file, which it would read empty).
 -- p_view names the view (default: the table's own name, what the storage
 -- switch will use; the tests build the face beside today's live table).
 -- Not idempotent: TG201 when the view exists. Runs with the caller's rights
@@ -58,6 +59,9 @@ BEGIN
     -- today's test (tgsis.versioned_view_source) while the storage is versioned, decided when the view is read:
     -- versioning can be enabled after the face is made (the hostile review found a face made on unversioned
     -- storage showing every chunk version, twice each vertex, once versioning was enabled)
+    -- a snapshot older than the chunk table's file (an add's rewrite, a storage switch) would read it empty:
+    -- 40001 instead, checked once per query (an InitPlan; tgsis.chunk_snapshot_guard)
+    v_where := v_where || format('(SELECT tgsis.chunk_snapshot_guard(%L::regclass))', v_chunk::text);
     v_where := v_where || format('CASE WHEN (SELECT EXISTS (SELECT FROM tgsis.versioned_tables t '
                                  'WHERE t.schemaname = %L AND t.tablename = %L)) '
                                  'THEN (v.revision = ANY ((SELECT tgsis.get_revisions(true))::integer[])) IS TRUE '

@@ -8,7 +8,9 @@
 -- on the key (geoid) reaches the chunk table's primary key: a scan of one
 -- object reads only its chunks. security_invoker: a role reads through it
 -- what it may read of the chunk table (its grants, its row-level security),
--- which gets the view's SELECT grants. Not idempotent: TG201 when it exists.
+-- which gets the view's SELECT grants. A snapshot older than the chunk
+-- table's file (tgsis.chunk_snapshot_guard, once per query) gets 40001, not an
+-- empty set. Not idempotent: TG201 when it exists.
 CREATE FUNCTION tgsis.create_chunk_view(p_table text)
 RETURNS regclass
 LANGUAGE plpgsql
@@ -28,8 +30,9 @@ BEGIN
     END IF;
     SELECT * INTO v_dec FROM tgsis.chunk_decode_sql(p_table, 'c') AS d;
     EXECUTE format('CREATE VIEW %s WITH (security_invoker = true) AS SELECT %s, c.revision, c.lastrevs, c.revclosed '
-                   'FROM %s c CROSS JOIN LATERAL unnest(%s) WITH ORDINALITY AS u(%s, o) WHERE %s',
-                   v_view, v_dec.select_list, v_chunk, v_dec.arrays, v_dec.aliases, v_dec.present);
+                   'FROM %s c CROSS JOIN LATERAL unnest(%s) WITH ORDINALITY AS u(%s, o) '
+                   'WHERE (SELECT tgsis.chunk_snapshot_guard(%L::regclass)) AND %s',
+                   v_view, v_dec.select_list, v_chunk, v_dec.arrays, v_dec.aliases, v_chunk::text, v_dec.present);
     EXECUTE format('COMMENT ON VIEW %s IS %L', v_view,
                    format('the chunks of %s decoded: one row per present slot and chunk version, with the columns of %s '
                           'and the chunk version''s revision, lastrevs, revclosed (no visibility filter)', v_chunk,

@@ -174,10 +174,13 @@ def chunk_table(conn: Conn, table: str, *, instants: bool = False) -> ChunkTable
             detail=f"tgsis.{table}_chunk does not exist (tgsis.create_chunk_table makes it)",
         )
     oid, versioned, size, readable = row
+    # the columns as the snapshot sees them: none if the table was made (a storage switch) or a property added after
+    # it, which the snapshot would read empty: 40001 then (tgsis.chunk_snapshot_guard), not a layout refused
     attributes = conn.execute(
         "SELECT attname::text, format_type(atttypid, atttypmod) FROM pg_catalog.pg_attribute "
-        "WHERE attrelid = %s AND attnum > 0 AND NOT attisdropped ORDER BY attnum",
-        (oid,),
+        "WHERE attrelid = %s AND attnum > 0 AND NOT attisdropped AND (SELECT tgsis.chunk_snapshot_guard(%s::oid::regclass)) "
+        "ORDER BY attnum",
+        (oid, oid),
     ).fetchall()
     names = [name for name, _ in attributes]
     keys = names[: names.index("revision")] if "revision" in names else names
@@ -274,21 +277,29 @@ def upload_chunks(conn: Conn, table: str, objects: Sequence[ObjectRows], storage
 
 
 def _visible(layout: ChunkTable, revisions: Sequence[int] | None = None) -> sql.Composable:
-    """The session's visibility test of chunk versions (today's versioned views'), or none when unversioned.
+    """The session's visibility test of chunk versions (today's versioned views'; none when unversioned), guarded.
+
+    The guard: ``tgsis.chunk_snapshot_guard`` once per statement, 40001 when the statement's snapshot predates
+    the chunk table's file (rewritten by an added property, made by a storage switch), which it would read empty.
 
     ``revisions``: the set to test with (the session's ``tgsis.get_revisions(true)`` read beforehand), for a
     statement run on another connection, whose session may be in another version.
     """
-    if not layout.versioned:
-        return sql.SQL("true")
-    if revisions is not None:
-        return sql.SQL("(c.revision = ANY ({set})) IS TRUE AND (NOT c.revclosed OR NOT (c.lastrevs && {set}))").format(
-            set=sql.SQL("{}::integer[]").format(sql.Literal([int(r) for r in revisions]))
-        )
-    return sql.SQL(
-        "(c.revision = ANY ((SELECT tgsis.get_revisions(true))::integer[])) IS TRUE "
-        "AND (NOT c.revclosed OR NOT (c.lastrevs && (SELECT tgsis.get_revisions(true))))"
+    # a snapshot older than the chunk table's file (an add's rewrite, a storage switch) would read it empty:
+    # 40001 instead, once per statement (tgsis.chunk_snapshot_guard, an InitPlan)
+    guard = sql.SQL("(SELECT tgsis.chunk_snapshot_guard(format('%I.%I', {}::text, {}::text)::regclass))").format(
+        sql.Literal(layout.schema), sql.Literal(f"{layout.table}_chunk")
     )
+    if not layout.versioned:
+        return guard
+    if revisions is not None:
+        return sql.SQL(
+            "{guard} AND (c.revision = ANY ({set})) IS TRUE AND (NOT c.revclosed OR NOT (c.lastrevs && {set}))"
+        ).format(guard=guard, set=sql.SQL("{}::integer[]").format(sql.Literal([int(r) for r in revisions])))
+    return sql.SQL(
+        "{} AND (c.revision = ANY ((SELECT tgsis.get_revisions(true))::integer[])) IS TRUE "
+        "AND (NOT c.revclosed OR NOT (c.lastrevs && (SELECT tgsis.get_revisions(true))))"
+    ).format(guard)
 
 
 def chunk_copy_query(layout: ChunkTable, geoids: Sequence[int], revisions: Sequence[int] | None = None) -> sql.Composed:
