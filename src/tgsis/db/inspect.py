@@ -164,6 +164,7 @@ def geometry_summary(conn: Conn, geoid: int) -> GeometrySummary:
                 "FROM tgsis.geometry WHERE geoid = %s"
             ).format(box_corners(conn, sql.Identifier("bbox"), "axes")),
             (geoid,),
+            binary=True,  # the box bit for bit, whatever the session's extra_float_digits
         ).fetchone()
     if row is None:
         raise NotFoundError(f"feature {geoid} does not exist")
@@ -174,7 +175,8 @@ def geometry_summary(conn: Conn, geoid: int) -> GeometrySummary:
 def feature_property_values(conn: Conn, fc: FeatureClass, geoid: int) -> dict[str, Any]:
     """The feature properties of feature ``geoid`` of class ``fc``, by name, in the table's column order."""
     with reraise():
-        cur = conn.execute(sql.SQL("SELECT * FROM {} WHERE _geoid = %s").format(_named(fc)), (geoid,))
+        # binary: float values bit for bit, whatever the session's extra_float_digits
+        cur = conn.execute(sql.SQL("SELECT * FROM {} WHERE _geoid = %s").format(_named(fc)), (geoid,), binary=True)
         names = [d.name for d in cur.description or []]
         row = cur.fetchone()
     return {n: v for n, v in zip(names, row or ()) if not n.startswith("_")}
@@ -305,7 +307,8 @@ def list_features(
         sql.SQL("LIMIT {}").format(sql.Literal(limit)) if limit is not None else sql.SQL(""),
     )
     with reraise():
-        rows = conn.execute(query, params).fetchall()
+        # binary: first and last instants, box and float values bit for bit, whatever the session's extra_float_digits
+        rows = conn.execute(query, params, binary=True).fetchall()
     return [
         FeatureRow(
             int(r[0]),

@@ -1,0 +1,157 @@
+"""Instants and float values read by the Python client are exact whatever the session's ``extra_float_digits``.
+
+Any user may run ``SET extra_float_digits = 0`` (or have it from ``PGOPTIONS``,
+``ALTER ROLE ... SET``, ``ALTER DATABASE ... SET``): below 1, PostgreSQL prints a
+float8 with 15 significant digits (less for a negative setting), so a value read
+as text is another number. An instant read that way is then looked up with ``=``
+(and missed: a feature's per-instant properties came back as NaN), used as the
+key of a G-map period (its rows missed, or its points mixed with a rounded
+weight), or handed to the user (``instants``, ``lifespan``, ``list_features``),
+whose ``get_at`` at such an instant then gives the instant before it. The
+reads go in binary (float8 bits); the SQL functions that print floats pin the
+setting themselves (their own tests: test_sql_merge_*, test_canonical_keys,
+test_model2_chunks). Each test compares the answers under ``extra_float_digits``
+0 and -15 with the values written, bit for bit.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import psycopg
+import pytest
+
+import tgsis
+from tests.temporal_data import evolving, series
+from tgsis import gmaps
+from tgsis.db import gmaps as G
+from tgsis.db.inspect import feature_property_values, list_features
+from tgsis.temporal import TopologyPeriod
+
+Conn = psycopg.Connection[Any]
+
+#: instants whose 15-digit text is another number (0.1 + 0.2, a third, 2.5e15 + 0.5), and two whose text is exact
+TIMES = [1e-300, 0.1, 0.1 + 0.2, 1 / 3, 2.5e15 + 0.5]
+#: per-instant values of many digits
+THROWS = [1 / 3, 2 / 3, 1 / 7, np.pi, 2.5e15 + 0.5]
+DIGITS = [0, -15]
+
+
+def _bits(values: Any) -> list[int]:
+    return [int(v) for v in np.asarray(values, dtype=np.float64).view(np.int64)]
+
+
+def _low_digits(conn: Conn, digits: int) -> None:
+    conn.execute(f"SET extra_float_digits = {int(digits)}")
+    conn.commit()
+    assert conn.execute("SELECT (1/3::float8)::text").fetchone() != ("0.3333333333333333",)  # the setting rounds
+
+
+@pytest.fixture
+def stepped(conn: Conn) -> int:
+    """A model-2 feature at TIMES, with a float8 feature property and a per-instant one (THROWS)."""
+    fc = tgsis.create_feature_class(
+        conn,
+        "stepped",
+        "SURFACE",
+        time_model="INSTANTS",
+        feature_properties={"depth": "float8"},
+        cell_properties=[("porosity", "real")],
+        instant_properties=[("throw", "double precision")],
+    )
+    sent = series(np.random.default_rng(40), TIMES, with_properties=True)
+    sent = type(sent)(sent.times, sent.surfaces, properties={"throw": np.array(THROWS)}, name=sent.name)
+    geoid = tgsis.insert_feature(conn, fc, sent, {"depth": 1 / 3})
+    conn.commit()
+    return geoid
+
+
+@pytest.mark.parametrize("digits", DIGITS)
+def test_surfaces_at_instants_read_exactly(conn: Conn, stepped: int, digits: int) -> None:
+    before = [tgsis.get_at(conn, stepped, t) for t in TIMES]
+    _low_digits(conn, digits)
+    back = tgsis.fetch_series(conn, "stepped", stepped)
+    assert _bits(back.times) == _bits(TIMES)
+    # the per-instant values are found by their instant, and are the values written
+    assert _bits(back.properties["throw"]) == _bits(THROWS)
+    assert _bits([t for t, _ in tgsis.instants(conn, stepped)]) == _bits(TIMES)
+    span = tgsis.lifespan(conn, stepped)
+    assert span is not None and _bits(span[:2]) == _bits([TIMES[0], TIMES[-1]])
+    # the instants the client gives back take the user to their own surface, not the one before
+    for (t, _), surface in zip(tgsis.instants(conn, stepped), before, strict=True):
+        got = tgsis.get_at(conn, stepped, t)
+        assert got is not None and surface is not None
+        assert _bits(got.vertices) == _bits(surface.vertices), t
+    # the question answers (an instant bounds the period where throw > 1) and the listing
+    periods = tgsis.property_periods(conn, "stepped", stepped, "throw", ">", 1.0)
+    assert [_bits([p.start, p.end]) for p in periods] == [_bits([TIMES[3], TIMES[-1]])]  # not alive after it
+    by_class = tgsis.class_property_periods(conn, "stepped", "throw", ">", 1.0)
+    assert _bits([by_class[stepped][0].start]) == _bits([TIMES[3]])
+    (row,) = list_features(conn, tgsis.get_feature_class(conn, "stepped"))
+    assert _bits([row.first, row.last]) == _bits([TIMES[0], TIMES[-1]])
+    assert _bits([row.properties["depth"]]) == _bits([1 / 3])
+    assert _bits([feature_property_values(conn, tgsis.get_feature_class(conn, "stepped"), stepped)["depth"]]) == _bits(
+        [1 / 3]
+    )
+
+
+@pytest.mark.parametrize("digits", DIGITS)
+def test_evolving_surfaces_read_and_append_exactly(conn: Conn, digits: int) -> None:
+    fc = tgsis.create_feature_class(
+        conn,
+        "moving",
+        "SURFACE",
+        time_model="EVOLVING",
+        cell_properties=[("porosity", "real")],
+        instant_properties=[("throw", "double precision"), ("note_code", "integer")],
+    )
+    sent = evolving(np.random.default_rng(41), [0.1, 1 / 3], with_properties=True)
+    geoid = tgsis.insert_feature(conn, fc, sent)
+    conn.commit()
+    written = tgsis.fetch_evolving(conn, fc, geoid)
+    _low_digits(conn, digits)
+    back = tgsis.fetch_evolving(conn, fc, geoid)
+    for got, want in zip(back.periods, written.periods, strict=True):
+        assert _bits(got.times) == _bits(want.times)
+        assert _bits(got.properties["throw"]) == _bits(want.properties["throw"])
+    last = written.periods[-1]
+    end = float(last.times[-1])  # 1/3 + 1: its 15-digit text is another number
+    # a period appended at the last instant, as the user knows it, is accepted (its text was refused)
+    tgsis.append_period(
+        conn,
+        fc,
+        geoid,
+        TopologyPeriod(
+            [end, end + 1 / 3],
+            last.triangles,
+            np.stack([last.positions[-1], last.positions[-1] + 1 / 3]),
+            vertex_properties={"porosity": np.full((2, len(last.positions[-1])), 0.25)},
+        ),
+    )
+    conn.commit()
+    assert _bits([t for t, _ in tgsis.instants(conn, geoid)][-2:]) == _bits([end, end + 1 / 3])
+
+
+@pytest.mark.parametrize("digits", DIGITS)
+def test_gmap_snapshot_reads_its_period_exactly(conn: Conn, digits: int) -> None:
+    fc = tgsis.create_feature_class(
+        conn, "blocks", "GMAP", time_model="GMAP", cell_level=2, cell_properties={"porosity": "float8"}
+    )
+    square = gmaps.GMap.from_triangles([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [[0, 1, 2], [0, 2, 3]])
+    period = gmaps.GMapPeriod(
+        [1 / 3, 0.1 + 0.7],
+        square,
+        np.stack([square.points, square.points + [0, 0, 1 / 3]]),
+        level=2,
+        cell_values={"porosity": [[1 / 3, 0.2], [0.3, 2 / 3]]},
+    )
+    evolving_map = gmaps.EvolvingGMap([period], alive=False, name="rising")
+    geoid = tgsis.insert_feature(conn, fc, evolving_map)
+    conn.commit()
+    _low_digits(conn, digits)
+    for t in (1 / 3, 0.5, 0.6, 0.1 + 0.7):
+        expected = evolving_map.at(t)
+        got = G.gmap_at(conn, geoid, t)
+        assert expected is not None and got is not None and got.same_as(expected), t
+    assert G.gmap_at(conn, geoid, 0.1 + 0.7 + 1e-12) is None
