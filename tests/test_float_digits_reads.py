@@ -23,6 +23,7 @@ import psycopg
 import pytest
 
 import tgsis
+from tests.merge_data import curved_surface
 from tests.temporal_data import evolving, series
 from tgsis import gmaps
 from tgsis.db import gmaps as G
@@ -155,3 +156,21 @@ def test_gmap_snapshot_reads_its_period_exactly(conn: Conn, digits: int) -> None
         got = G.gmap_at(conn, geoid, t)
         assert expected is not None and got is not None and got.same_as(expected), t
     assert G.gmap_at(conn, geoid, 0.1 + 0.7 + 1e-12) is None
+
+
+@pytest.mark.parametrize("digits", DIGITS)
+def test_static_feature_values_and_colour_read_exactly(conn: Conn, digits: int) -> None:
+    """The same reads of a static feature: its float properties and colour (``real`` columns) as written."""
+    tgsis.create_feature_class(conn, "faults", "SURFACE", feature_properties={"depth": "float8"})
+    surface = curved_surface()
+    colour = [float(np.float32(1 / 3)), 0.5, float(np.float32(0.1))]  # float32-exact: kept in the real columns only
+    surface.metadata["color"] = colour
+    geoid = tgsis.insert_feature(conn, "faults", surface, {"depth": 1 / 3}, drop_extra_properties=True)
+    conn.commit()
+    _low_digits(conn, digits)
+    back = tgsis.fetch_feature(conn, "faults", geoid)
+    assert _bits([back.properties["depth"]]) == _bits([1 / 3])
+    assert [float(np.float32(c)) for c in back.mesh.metadata["color"]] == colour
+    checked_out = tgsis.checkout(conn, geoid, "faults")
+    assert _bits([checked_out.properties["depth"]]) == _bits([1 / 3])
+    conn.rollback()
