@@ -170,6 +170,7 @@ def test_static_feature_values_and_colour_read_exactly(conn: Conn, digits: int) 
     _low_digits(conn, digits)
     back = tgsis.fetch_feature(conn, "faults", geoid)
     assert _bits([back.properties["depth"]]) == _bits([1 / 3])
+    assert back.mesh is not None
     assert [float(np.float32(c)) for c in back.mesh.metadata["color"]] == colour
     checked_out = tgsis.checkout(conn, geoid, "faults")
     assert _bits([checked_out.properties["depth"]]) == _bits([1 / 3])
