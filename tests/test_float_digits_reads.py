@@ -175,3 +175,44 @@ def test_static_feature_values_and_colour_read_exactly(conn: Conn, digits: int) 
     checked_out = tgsis.checkout(conn, geoid, "faults")
     assert _bits([checked_out.properties["depth"]]) == _bits([1 / 3])
     conn.rollback()
+
+
+@pytest.mark.parametrize("digits", DIGITS)
+def test_conflict_discards_counts_edits_whatever_the_sessions_digits(conn: Conn, digits: int) -> None:
+    """``tgsis.conflict_discards`` compares row versions as jsonb, whose floats are the float8 text: a session's low
+    setting hid an edit in the 16th or 17th digit (a solution then said it lost nothing). Model 1; the same
+    comparison (and model 2's row key, which holds the instant) for every model."""
+    from tests.test_resolve_discards import dome
+
+    tgsis.create_feature_class(
+        conn, "domes", "SURFACE", feature_properties={"note": "text"}, cell_properties={"porosity": "float8"}
+    )
+    tgsis.enable_feature_versioning(conn)
+    a = tgsis.insert_feature(conn, "domes", dome())
+    tgsis.create_version(conn, "edit")
+    conn.commit()
+    with tgsis.in_version(conn, "edit"):
+        conn.execute("UPDATE tgsis.vrtx SET z = z + 1 WHERE geoid = %s AND vrtxid = 0", (a,))
+        # 7.5 -> 7.500000000000001 and 0.05 -> 0.05000000000000001: other numbers, one 15-digit text
+        conn.execute("UPDATE tgsis.vrtx SET z = %s WHERE geoid = %s AND vrtxid = 1", (np.nextafter(7.5, 8.0), a))
+        conn.execute(
+            "UPDATE domes_cellpros SET porosity = %s WHERE _geoid = %s AND _idx = 5", (np.nextafter(0.05, 1.0), a)
+        )
+        conn.execute("UPDATE domes SET note = 'mine' WHERE _geoid = %s", (a,))
+        conn.commit()
+    conn.execute("UPDATE tgsis.vrtx SET z = z - 1 WHERE geoid = %s AND vrtxid = 20", (a,))
+    conn.execute("UPDATE domes SET note = 'checked' WHERE _geoid = %s", (a,))
+    conn.commit()
+    assert [c.objectkey for c in tgsis.find_conflicts(conn, "edit")] == [str(a)]
+    conn.commit()
+    query = (
+        "SELECT shortname, rows_added, rows_removed, rows_changed, values_changed FROM tgsis.conflict_discards('edit')"
+        " WHERE solution = 'parent' ORDER BY shortname"
+    )
+    lost = [("public.domes", 0, 0, 1, 1), ("public.domes_cellpros", 0, 0, 1, 1), ("vrtx", 0, 0, 2, 2)]
+    assert conn.execute(query).fetchall() == lost  # what the parent's solution loses of the version's edits
+    _low_digits(conn, digits)
+    assert conn.execute(query).fetchall() == lost
+    assert sorted(
+        (d.shortname, d.rows_changed) for d in tgsis.conflict_discards(conn, "edit") if d.solution == "parent"
+    ) == [(t, changed) for t, _, _, changed, _ in lost]
