@@ -216,3 +216,41 @@ def test_conflict_discards_counts_edits_whatever_the_sessions_digits(conn: Conn,
     assert sorted(
         (d.shortname, d.rows_changed) for d in tgsis.conflict_discards(conn, "edit") if d.solution == "parent"
     ) == [(t, changed) for t, _, _, changed, _ in lost]
+
+
+@pytest.mark.parametrize("digits", DIGITS)
+def test_a_region_solution_at_an_instant_of_no_short_text_holds(conn: Conn, digits: int) -> None:
+    """The stored regions of a model-2 conflict are read back with their instant (``times``): read as text under a
+    low setting, the instant was another number, the stored regions no longer matched the merge's, and the
+    region's solution could not be recorded (or, recorded, was not found by the merge)."""
+    from tests.merge_data import SIDE
+    from tests.test_merge_instants import CHILD_SHIFT, NORTH, PARENT_SHIFT, _shape, move, shifted
+
+    times = (1.0, 1 + 1 / 3, 3.0)  # 1.3333333333333333: its 15-digit text is another number
+    tgsis.create_feature_class(conn, "horizons", "SURFACE", time_model="INSTANTS")
+    tgsis.enable_feature_versioning(conn)
+    cells = curved_surface().cells
+    surfaces = [tgsis.Surface(_shape(i), cells) for i in range(len(times))]
+    geoid = tgsis.insert_feature(conn, "horizons", tgsis.SurfaceSeries(np.asarray(times), surfaces))
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    move(conn, "e1", geoid, times[1], NORTH, CHILD_SHIFT)
+    move(conn, "DEFAULT", geoid, times[1], NORTH[:SIDE], PARENT_SHIFT)
+    _low_digits(conn, digits)
+    [conflict] = tgsis.find_conflicts(conn, "e1")
+    assert [(r.region, r.times, r.conflict) for r in conflict.regions] == [(0, times[1], True)]
+    conn.commit()
+    tgsis.resolve_region(conn, "e1", geoid, 0, "child")
+    conn.commit()
+    [again] = tgsis.find_conflicts(conn, "e1")  # the recorded solution is the stored region's still
+    assert [(r.region, r.solution) for r in again.regions] == [(0, "child")]
+    conn.commit()
+    tgsis.merge_version(conn, "e1")
+    conn.commit()
+    with tgsis.in_version(conn, "DEFAULT"):
+        rows = conn.execute(
+            "SELECT x, y, z FROM tgsis.times_vrtx WHERE geoid = %s AND times = %s ORDER BY vrtxid",
+            (geoid, times[1]),
+            binary=True,
+        ).fetchall()
+    assert np.asarray(rows).tobytes() == shifted(_shape(1), NORTH, CHILD_SHIFT).tobytes()
