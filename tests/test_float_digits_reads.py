@@ -254,3 +254,28 @@ def test_a_region_solution_at_an_instant_of_no_short_text_holds(conn: Conn, digi
             binary=True,
         ).fetchall()
     assert np.asarray(rows).tobytes() == shifted(_shape(1), NORTH, CHILD_SHIFT).tobytes()
+
+
+@pytest.mark.parametrize("at", [1, 2])
+def test_an_unsolved_region_at_an_instant_from_1e15_on_is_named_as_python_names_it(conn: Conn, at: int) -> None:
+    """The psql refusal names an unsolved region's geometry instant as Python's repr does. From 1e15 on the float8
+    text is exponential where repr is positional: the name went through a float8::numeric cast, which keeps 15
+    digits (2500000000000002.0 named 2500000000000000.0), or stayed exponential (2.5000000000000005e+15)."""
+    from tests.test_merge_instants import _shape
+    from tests.test_sql_merge_period_regions_hostile import _conflict
+    from tests.test_sql_merge_write import both_merges
+
+    tgsis.create_feature_class(conn, "far", "SURFACE", time_model="EVOLVING")
+    tgsis.enable_feature_versioning(conn)
+    times = (2.5e15, 2.5e15 + 0.5, 2.5e15 + 2)
+    period = TopologyPeriod(np.asarray(times), curved_surface().cells, np.stack([_shape(i) for i in range(3)]))
+    geoid = int(tgsis.insert_feature(conn, "far", tgsis.EvolvingSurface([period])))
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    _conflict(conn, geoid, times[0], times[at])
+    _low_digits(conn, 0)
+    theirs, mine = both_merges(conn, "e1")
+    assert theirs[:2] == mine[:2] == ("refused", "TG302"), (theirs, mine)
+    named = f"region 0 at geometry instant {times[at]!r} of the period starting at {times[0]!r} unsolved"
+    assert named in theirs[2], theirs  # the Python merge's name
+    assert named in mine[2], mine  # psql's
