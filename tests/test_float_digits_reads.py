@@ -40,7 +40,7 @@ DIGITS = [0, -15]
 
 
 def _bits(values: Any) -> list[int]:
-    return [int(v) for v in np.asarray(values, dtype=np.float64).view(np.int64)]
+    return [int(v) for v in np.asarray(values, dtype=np.float64).ravel().view(np.int64)]
 
 
 def _low_digits(conn: Conn, digits: int) -> None:
