@@ -14,12 +14,15 @@
 -- which tgsis.changed_objects reads too); row versions the base and both
 -- sides see alike are left out before they are compared (of a model table
 -- stored in chunks, the slots of a changed chunk the three sets see alike too:
--- tgsis.storage_changed_rows, so the cost is sized by the change).
+-- tgsis.storage_changed_rows, so the cost is sized by the change). Row versions are compared as jsonb, whose
+-- floats are their float8 text: extra_float_digits is pinned (a session's 0 or less printed 15 digits or fewer,
+-- so an edit in the 16th or 17th digit looked like no edit, and two instants of one such text one row key).
 CREATE FUNCTION tgsis.conflict_discards(p_version text, p_objectclass text DEFAULT NULL, p_objectkey text DEFAULT NULL)
 RETURNS TABLE (objectclass text, objectkey text, solution text, discarded text, shortname text, tablename text,
                description text, rows_added bigint, rows_removed bigint, rows_changed bigint, values_changed bigint)
 LANGUAGE plpgsql
 VOLATILE
+SET extra_float_digits = 1
 AS $$
 DECLARE
     v_version tgsis.versions;

@@ -1,7 +1,9 @@
 -- tgsis.check_no_unsolved_conflicts(version, action): recompute a version's conflicts; TG302 naming the unsolved ones.
 -- The unsolved regions of a surface at instants (an evolving surface) are named with their instant (geometry instant and
 -- period), as the Python merge names them: extra_float_digits is pinned (an instant such as 0.1 + 0.2 is named
--- 0.30000000000000004, not 0.3, whatever the session's setting).
+-- 0.30000000000000004, not 0.3, whatever the session's setting). Python's repr is positional below 1e16 where the
+-- float8 text is not (from 1e15 on): such an instant goes through numeric from its exact text (a float8::numeric cast
+-- keeps 15 digits: 2500000000000002.0 was named 2500000000000000.0; -0.0 is named 0.0, as the merge's keys are).
 -- Its hint points meshes whose regions are stored (tgsis.conflict_regions) to the Python merge by
 -- region (tgsis version merge / refresh), which also applies average and manual solutions (the SQL
 -- merge by region, tgsis.merge_regions_in_sql, merges the others once their regions are solved).
@@ -33,12 +35,15 @@ BEGIN
         -- (`region 3 at instant 2.0 unsolved`)
         SELECT string_agg(format('%s %s: region %s at %s unsolved', r.objectclass, r.objectkey, r.region,
                                  CASE WHEN r.timem IS NULL THEN 'instant ' ELSE 'geometry instant ' END
-                                 || CASE WHEN r.times = trunc(r.times) AND abs(r.times) < 1e16
-                                         THEN r.times::numeric::text || '.0' ELSE r.times::text END
+                                 || CASE WHEN abs(r.times) < 1e16 AND (r.times = trunc(r.times) OR abs(r.times) >= 1e15)
+                                         THEN r.times::text::numeric::text || CASE WHEN r.times = trunc(r.times) THEN '.0' ELSE '' END
+                                         ELSE r.times::text END
                                  || CASE WHEN r.timem IS NULL THEN ''
                                          ELSE ' of the period starting at '
-                                              || CASE WHEN r.timem = trunc(r.timem) AND abs(r.timem) < 1e16
-                                                      THEN r.timem::numeric::text || '.0' ELSE r.timem::text END END),
+                                              || CASE WHEN abs(r.timem) < 1e16 AND (r.timem = trunc(r.timem) OR abs(r.timem) >= 1e15)
+                                                      THEN r.timem::text::numeric::text
+                                                           || CASE WHEN r.timem = trunc(r.timem) THEN '.0' ELSE '' END
+                                                      ELSE r.timem::text END END),
                           '; ' ORDER BY r.objectclass, r.objectkey, r.region)
           INTO v_slices
           FROM tgsis.conflict_regions r JOIN tgsis.conflicts k USING (versionid, objectclass, objectkey)

@@ -443,6 +443,7 @@ def collection_members(conn: Conn, fc: FeatureClass, wanted: Sequence[int]) -> d
         "LEFT JOIN tgsis.geometry g ON g.geoid = m.geoid "
         "WHERE c.geoid = ANY(%s) ORDER BY c.geoid, m.ord",
         (list(wanted),),
+        binary=True,  # float values (properties, colours) bit for bit, whatever the session's extra_float_digits
     ).fetchall()
     members: dict[int, list[tuple[int, Part]]] = {int(g): [] for g in wanted}
     for cid, mid, geotype, geoname, *meaning in rows:

@@ -178,6 +178,9 @@ def instant_values(conn: Conn, fc: FeatureClass, geoid: int, keys: Sequence[str]
             fc.qualified(fc.protable),
         ),
         (geoid,),
+        # binary: the time keys (matched against the instants' bits) and the float values exact, whatever the
+        # session's extra_float_digits (below 1, text rounds them: every key missed, its values silently NULL)
+        binary=True,
     ).fetchall()
     return {tuple(float(v) for v in r[: len(keys)]): list(r[len(keys) :]) for r in rows}
 
@@ -428,6 +431,7 @@ def lifespan(conn: Conn, feature_id: int) -> tuple[float, float, bool] | None:
             "LATERAL (SELECT min(t) AS first, max(t) AS last FROM tgsis.geometry_instants(g.geoid)) i "
             "WHERE g.geoid = %s",
             (feature_id,),
+            binary=True,  # the instants bit for bit, whatever the session's extra_float_digits
         ).fetchone()
     if row is None:
         raise NotFoundError(f"feature {feature_id} does not exist", hint="`tgsis ls` lists the features")

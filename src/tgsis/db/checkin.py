@@ -138,6 +138,7 @@ def _feature_row(conn: Conn, fc: FeatureClass, geoid: int) -> tuple[str | None, 
             sql.SQL("").join(sql.SQL(", f.{}").format(sql.Identifier(p)) for p in props), fc.qualified(fc.featuretable)
         ),
         (geoid,),
+        binary=True,  # float values (properties, colours) bit for bit, whatever the session's extra_float_digits
     ).fetchone()
     if row is None:
         raise NotFoundError(f"feature class {fc.name} has no feature {geoid}")
@@ -982,7 +983,7 @@ def checkout(conn: Conn, feature_id: int, feature_class: str | FeatureClass | No
         assert row is not None
         base = _stored_mesh(conn, fc, feature_id, name)
         meaning = conn.execute(
-            f"SELECT {MEANING_COLUMNS} FROM tgsis.geometry g WHERE g.geoid = %s", (feature_id,)
+            f"SELECT {MEANING_COLUMNS} FROM tgsis.geometry g WHERE g.geoid = %s", (feature_id,), binary=True
         ).fetchone()
         restore_version_settings(conn, settings, local=True)  # for the rest of an enclosing transaction
         return version, revision, name, properties, row, base, meaning

@@ -354,6 +354,7 @@ def append_period(
             "(SELECT coalesce(max(nodeid) + 1, 0) FROM tgsis.node WHERE geoid = %(g)s), "
             "(SELECT coalesce(max(trglid) + 1, 0) FROM tgsis.d4dtrgl WHERE geoid = %(g)s)",
             {"g": feature_id},
+            binary=True,  # the last instant bit for bit, whatever the session's extra_float_digits
         ).fetchone()
         assert row is not None
         if row[0] is None or float(row[0]) != period.start:
@@ -423,6 +424,7 @@ def fetch_evolving(conn: Conn, feature_class: str | FeatureClass, feature_id: in
             "SELECT geoname, alive, colorred, colorgreen, colorblue FROM tgsis.geometry "
             "WHERE geoid = %s AND timemodel = 'EVOLVING'",
             (feature_id,),
+            binary=True,  # the colour bit for bit, whatever the session's extra_float_digits
         ).fetchone()
         if row is None:
             raise NotFoundError(f"feature {feature_id} of class {fc.name} does not exist")

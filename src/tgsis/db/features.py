@@ -349,6 +349,7 @@ def fetch_features(conn: Conn, feature_class: str | FeatureClass, ids: Sequence[
                 fc.qualified(fc.featuretable),
                 sql.SQL("WHERE f._geoid = ANY({})").format(sql.Literal(list(ids))) if ids is not None else sql.SQL(""),
             ),
+            binary=True,  # float values (properties, colours) bit for bit, whatever the session's extra_float_digits
         ).fetchall()
         found = {int(r[0]): r for r in rows}
         wanted = list(ids) if ids is not None else sorted(found)

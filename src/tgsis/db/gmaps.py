@@ -469,7 +469,11 @@ def gmap_at(conn: Conn, feature_id: int, t: float) -> GMap | None:
     def read() -> tuple[Any, ...] | None:
         """The period's rows at t, of one state (:func:`consistent_read`)."""
         n_row = conn.execute("SELECT dimension, embedding FROM tgsis.gmap WHERE geoid = %s", (feature_id,)).fetchone()
-        frame = conn.execute("SELECT timem, t0, t1, w FROM tgsis.gmap_frame(%s, %s)", (feature_id, t)).fetchone()
+        # binary: the period's key and the weight bit for bit, whatever the session's extra_float_digits (below 1,
+        # text rounds them: the period's rows are missed, or the points mixed with another weight)
+        frame = conn.execute(
+            "SELECT timem, t0, t1, w FROM tgsis.gmap_frame(%s, %s)", (feature_id, t), binary=True
+        ).fetchone()
         if n_row is None or frame is None:
             return None
         n, m = int(n_row[0]), int(n_row[1])
@@ -624,7 +628,7 @@ def _life(conn: Conn, feature_id: int) -> tuple[float, float] | None:
     """Model 4's span in the view's time slider: its first and last geometry instant (``tgsis.gmap_timet``)."""
     with reraise():
         row = conn.execute(
-            "SELECT min(timet), max(timet) FROM tgsis.gmap_timet WHERE geoid = %s", (feature_id,)
+            "SELECT min(timet), max(timet) FROM tgsis.gmap_timet WHERE geoid = %s", (feature_id,), binary=True
         ).fetchone()
     return None if row is None or row[0] is None else (float(row[0]), float(row[1]))
 

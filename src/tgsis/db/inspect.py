@@ -164,6 +164,7 @@ def geometry_summary(conn: Conn, geoid: int) -> GeometrySummary:
                 "FROM tgsis.geometry WHERE geoid = %s"
             ).format(box_corners(conn, sql.Identifier("bbox"), "axes")),
             (geoid,),
+            binary=True,  # the box bit for bit, whatever the session's extra_float_digits
         ).fetchone()
     if row is None:
         raise NotFoundError(f"feature {geoid} does not exist")
@@ -172,12 +173,24 @@ def geometry_summary(conn: Conn, geoid: int) -> GeometrySummary:
 
 @checked
 def feature_property_values(conn: Conn, fc: FeatureClass, geoid: int) -> dict[str, Any]:
-    """The feature properties of feature ``geoid`` of class ``fc``, by name, in the table's column order."""
+    """The feature properties of feature ``geoid`` of class ``fc``, by name, in the class's (the table's) order.
+
+    Read in binary: float values bit for bit, whatever the session's
+    ``extra_float_digits`` (the class's properties only: binary has every
+    property type's loader, not that of a column added by hand).
+    """
+    names = [p.name for p in fc.feature_properties]
+    if not names:
+        return {}
     with reraise():
-        cur = conn.execute(sql.SQL("SELECT * FROM {} WHERE _geoid = %s").format(_named(fc)), (geoid,))
-        names = [d.name for d in cur.description or []]
-        row = cur.fetchone()
-    return {n: v for n, v in zip(names, row or ()) if not n.startswith("_")}
+        row = conn.execute(
+            sql.SQL("SELECT {} FROM {} WHERE _geoid = %s").format(
+                sql.SQL(", ").join(sql.Identifier(n) for n in names), _named(fc)
+            ),
+            (geoid,),
+            binary=True,
+        ).fetchone()
+    return dict(zip(names, row or ()))
 
 
 @dataclass(frozen=True)
@@ -305,7 +318,8 @@ def list_features(
         sql.SQL("LIMIT {}").format(sql.Literal(limit)) if limit is not None else sql.SQL(""),
     )
     with reraise():
-        rows = conn.execute(query, params).fetchall()
+        # binary: first and last instants, box and float values bit for bit, whatever the session's extra_float_digits
+        rows = conn.execute(query, params, binary=True).fetchall()
     return [
         FeatureRow(
             int(r[0]),

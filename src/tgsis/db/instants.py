@@ -317,6 +317,7 @@ def fetch_series(conn: Conn, feature_class: str | FeatureClass, feature_id: int)
             "SELECT geoname, alive, colorred, colorgreen, colorblue FROM tgsis.geometry "
             "WHERE geoid = %s AND timemodel = 'INSTANTS'",
             (feature_id,),
+            binary=True,  # the colour bit for bit, whatever the session's extra_float_digits
         ).fetchone()
         if row is None:
             raise NotFoundError(f"feature {feature_id} of class {fc.name} does not exist")

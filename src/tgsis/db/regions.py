@@ -236,6 +236,7 @@ def _stored_regions(conn: Conn, versionid: int, objectclass: str, objectkey: str
         f"SELECT {_REGION_COLUMNS} FROM tgsis.conflict_regions"
         " WHERE versionid = %s AND objectclass = %s AND objectkey = %s ORDER BY region",
         (versionid, objectclass, objectkey),
+        binary=True,  # the instants (times, timem) bit for bit, whatever the session's extra_float_digits
     ).fetchall()
     return [_region_of_row(r) for r in rows]
 
@@ -974,6 +975,7 @@ def _record(conn: Conn, version: str, key: str, index: int, solution: str, state
         f"SELECT {_REGION_COLUMNS} FROM tgsis.resolve_region(%s, 'feature', %s, %s, %s, %s,"
         " %s, %s::float8[], %s, %s, %s::text[], %s::float8[], %s::text[], %s::float8[])",
         (version, key, index, solution, mesh, *(rows or (None,) * 8)),
+        binary=True,  # the instants (times, timem) bit for bit, whatever the session's extra_float_digits
     ).fetchone()
     assert row is not None
     return _region_of_row(row)

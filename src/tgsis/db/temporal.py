@@ -75,7 +75,10 @@ def instants(conn: Conn, feature_id: int) -> list[tuple[float, bool]]:
     geometry instant; True where a topology period starts.
     """
     with reraise(), conn.transaction():  # a savepoint: an error leaves the caller's transaction usable
-        rows = conn.execute("SELECT t, topology FROM tgsis.geometry_instants(%s)", (feature_id,)).fetchall()
+        # binary: the instants bit for bit, whatever the session's extra_float_digits (text rounds them below 1)
+        rows = conn.execute(
+            "SELECT t, topology FROM tgsis.geometry_instants(%s)", (feature_id,), binary=True
+        ).fetchall()
     return [(float(r[0]), bool(r[1])) for r in rows]
 
 
@@ -322,6 +325,7 @@ def property_periods(
             "SELECT coalesce(lower(period), '-Infinity'), coalesce(upper(period), 'Infinity'), lower_inc(period), "
             "upper_inc(period) FROM tgsis.property_periods(%s, %s, %s, %s, %s, %s)",
             (class_name(feature_class), feature_id, prop, op, float(value), check_convention(convention)),
+            binary=True,  # the bounds bit for bit, whatever the session's extra_float_digits
         ).fetchall()
     return [Period(float(r[0]), float(r[1]), bool(r[2]), bool(r[3])) for r in rows]
 
@@ -409,6 +413,7 @@ def class_property_periods(
             "SELECT geoid, coalesce(lower(period), '-Infinity'), coalesce(upper(period), 'Infinity'), lower_inc(period), "
             "upper_inc(period) FROM tgsis.class_property_periods(%s, %s, %s, %s, %s)",
             (class_name(feature_class), prop, op, float(value), check_convention(convention)),
+            binary=True,  # the bounds bit for bit, whatever the session's extra_float_digits
         ).fetchall()
     found: dict[int, list[Period]] = {}
     for r in rows:
