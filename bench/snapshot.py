@@ -18,10 +18,13 @@ VACUUM ANALYZEd after the uploads (what autovacuum does soon after).
 tgsis is installed from the client's SQL sources (``method="sql"``), so the
 functions measured are this checkout's whatever the server has installed;
 model 1 (the static baseline) is stored as installed, in chunks by default
-(issue 40), the evolving surface (model 3) in rows; the relations printed
-and VACUUMed are named by ``tgsis.storage_table``.
+(issue 40), the evolving surface (model 3) in rows, or with ``--time-chunks``
+its triangles and node positions in chunks (``tgsis.store_in_chunks('d4dtrgl')``,
+``'d4dvrtx'``, before the uploads: the Python paths then write and read through
+the face); the relations printed and VACUUMed are named by ``tgsis.storage_table``.
 
     python bench/snapshot.py [--side 1000] [--instants 10] [--repeat 5] [--no-two-periods] [--show-plans]
+                             [--time-chunks]
                                                           # TGSIS_PG=system|embedded
 """
 
@@ -116,6 +119,7 @@ def main() -> None:
         "--no-two-periods", dest="two_periods", action="store_false", help="skip the variant with two topology periods"
     )
     parser.add_argument("--show-plans", action="store_true", help="print EXPLAIN (ANALYZE, BUFFERS) of vertices_at")
+    parser.add_argument("--time-chunks", action="store_true", help="store model 3's d4dtrgl and d4dvrtx in chunks")
     args = parser.parse_args()
 
     grid = grid_surface(args.side)
@@ -133,6 +137,8 @@ def main() -> None:
     with bench_database() as conn:
         tgsis.create_feature_class(conn, "static_grid", "SURFACE")
         tgsis.create_feature_class(conn, "evolving_grid", "SURFACE", time_model="EVOLVING")
+        if args.time_chunks:
+            conn.execute("SELECT tgsis.store_in_chunks('d4dtrgl'), tgsis.store_in_chunks('d4dvrtx')")
         conn.commit()
 
         ids: dict[str, int] = {}
@@ -184,6 +190,7 @@ def main() -> None:
         executor = {name: executor_s(conn, vertices_query(key, t), args.repeat) for name, (key, t) in cases.items()}
         executor_static = executor_s(conn, static_query, args.repeat)
 
+    print(f"model 3's d4dtrgl, d4dvrtx in: {'chunks' if args.time_chunks else 'rows'}")
     print(f"upload, static surface (insert_feature):          {up_static:6.2f} s")
     print(f"upload, evolving, 1 period x {g} instants:          {up_one:6.2f} s  ({up_one / up_static:.2f}x static)")
     if args.two_periods:

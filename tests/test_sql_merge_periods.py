@@ -407,9 +407,10 @@ def test_a_role_that_may_not_write_a_table_is_refused_as_in_python_and_nothing_i
         tgsis.grant_version(conn, "e1", "all", made.name("ed"))
         tgsis.grant_version(conn, "DEFAULT", "merge", made.name("ed"))
         if revoked == "INSERT on the storage":  # (the Python client COPYs new row versions there)
-            conn.execute(
-                sql.SQL("REVOKE INSERT ON {} FROM tgsis_editor").format(sql.Identifier(schema, f"{table}_ver"))
-            )
+            # (<table>_ver, or its chunk table once stored in chunks: TGSIS_TEST_TIME_STORAGE=chunks)
+            storage = conn.execute("SELECT tgsis.storage_table(%s, %s)", (schema, table)).fetchone()
+            assert storage is not None
+            conn.execute(sql.SQL("REVOKE INSERT ON {} FROM tgsis_editor").format(sql.SQL(storage[0])))
         else:
             conn.execute(
                 sql.SQL("REVOKE {} ON {} FROM tgsis_editor").format(sql.SQL(revoked), sql.Identifier(schema, table))

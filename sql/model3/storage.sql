@@ -118,9 +118,13 @@ VALUES (3, 'continuously evolving surfaces', 'EVOLVING', '{SURFACE}',
         'create_model3_storage', 'evolving_extent', 'check_temporal_geometry',
         'surfaces whose nodes move linearly between geometry instants, with topology periods',
         'merge_periods_by_slice');
-INSERT INTO tgsis.model_tables (tablename, model, iudorder, description) VALUES
-    ('timem',   3, 1, 'a topology instant (start of a topology period) of an evolving surface'),
-    ('timet',   3, 2, 'a geometry instant of a topology period'),
-    ('node',    3, 2, 'a node (vertex of the topology) of a topology period'),
-    ('d4dtrgl', 3, 2, 'a triangle of a topology period'),
-    ('d4dvrtx', 3, 2, 'the position of a node at a geometry instant of its period');
+-- (the triangles and node positions are registered for chunks, keyed (geoid, timem, chunk) and
+-- (geoid, timem, timet, chunk): docs/storage.md, "Snapshots at t"; stored as rows until tgsis.store_in_chunks
+-- switches them: chunkdefault false; the instants timem/timet and the nodes stay rows: a node row is its key
+-- only, and a chunk holds at least one array that numbers its slots)
+INSERT INTO tgsis.model_tables (tablename, model, iudorder, description, chunkcolumn, chunkrefs, chunksize, chunkdefault) VALUES
+    ('timem',   3, 1, 'a topology instant (start of a topology period) of an evolving surface', NULL, '{}', NULL, false),
+    ('timet',   3, 2, 'a geometry instant of a topology period', NULL, '{}', NULL, false),
+    ('node',    3, 2, 'a node (vertex of the topology) of a topology period', NULL, '{}', NULL, false),
+    ('d4dtrgl', 3, 2, 'a triangle of a topology period', 'trglid', '{nodeid1,nodeid2,nodeid3}', 1024, false),
+    ('d4dvrtx', 3, 2, 'the position of a node at a geometry instant of its period', 'nodeid', '{}', 1024, false);

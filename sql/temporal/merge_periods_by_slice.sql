@@ -229,17 +229,20 @@ BEGIN
                                  ELSE format('ARRAY[%s]::text[]::text', v_eq) END,
                  -- the rows of the whole periods (the geometry instants: of every period read), then those of the keys,
                  -- each key looked up alone (OFFSET 0: not joined to the table as a whole, which a small table invites)
-                 format('SELECT w.* FROM %1$I.%2$I w WHERE w.%3$I = $1[1]::bigint AND w.%4$I = ANY ($1[%5$s]::float8[]) %6$s',
-                        (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver', v_spec.okey, v_spec.mcol,
+                 -- (stored in chunks, the decoded chunk versions: tgsis.storage_row_versions; for the keys, of only the
+                 -- chunks holding their ids)
+                 format('SELECT w.* FROM %1$s%2$s w WHERE w.%3$I = $1[1]::bigint AND w.%4$I = ANY ($1[%5$s]::float8[]) %6$s',
+                        tgsis.storage_row_versions((v_spec.vt).schemaname, (v_spec.vt).tablename), '', v_spec.okey, v_spec.mcol,
                         CASE WHEN v_spec.idcol IS NULL THEN 2 ELSE 4 END,
                         -- (no whole period: no statement that the planner could answer by a scan of the object)
                         CASE WHEN v_spec.idcol IS NOT NULL AND cardinality(v_whole) = 0 THEN 'AND false' ELSE '' END)
                  || CASE WHEN v_spec.idcol IS NULL THEN '' ELSE format(
                         ' UNION ALL SELECT w.* FROM unnest($1[5]::float8[], $1[6]::float8[], $5) AS k (m, t, id)
-                            CROSS JOIN LATERAL (SELECT w.* FROM %1$I.%2$I w
+                            CROSS JOIN LATERAL (SELECT w.* FROM %1$s%2$s w
                                                  WHERE w.%3$I = $1[1]::bigint AND w.%4$I = k.m %6$s AND w.%5$I = k.id
                                                  OFFSET 0) AS w',
-                        (v_spec.vt).schemaname, (v_spec.vt).tablename || '_ver', v_spec.okey, v_spec.mcol, v_spec.idcol,
+                        tgsis.storage_row_versions((v_spec.vt).schemaname, (v_spec.vt).tablename, coalesce(v_spec.kids, '{}')),
+                        '', v_spec.okey, v_spec.mcol, v_spec.idcol,
                         CASE WHEN v_spec.tcol IS NULL THEN '' ELSE format('AND w.%I = k.t', v_spec.tcol) END) END),
                p_1 => ARRAY[v_key, v_periods::text, v_cset::text, v_whole::text, coalesce(v_spec.kms, '{}')::text,
                             coalesce(v_kts, '{}')::text],

@@ -110,7 +110,7 @@ ALTER TABLE tgsis.model_tables
                                               AND (chunkcolumn IS NOT NULL OR chunkrefs = '{}')
                                               AND (chunksize IS NULL OR (chunksize >= 64 AND chunksize <= 16384
                                                                          AND chunksize & (chunksize - 1) = 0))),
-    -- model 1's tables are stored in chunks by default, model 2's time tables are registered for them only
+    -- model 1's tables are stored in chunks by default, model 2's and 3's per-vertex/cell tables are registered for them only
     ADD COLUMN chunkdefault boolean NOT NULL DEFAULT false,
     ADD CONSTRAINT model_tables_chunkdefault CHECK (NOT chunkdefault OR chunkcolumn IS NOT NULL);
 COMMENT ON COLUMN tgsis.model_tables.chunkdefault IS
@@ -119,7 +119,8 @@ UPDATE tgsis.model_tables t SET chunkcolumn = c.chunkcolumn, chunkrefs = c.chunk
   FROM (VALUES ('vrtx', 'vrtxid', '{}'::text[], true), ('point', 'pointid', '{vrtxid1}', true),
                ('segment', 'segid', '{vrtxid1,vrtxid2}', true), ('trgl', 'trglid', '{vrtxid1,vrtxid2,vrtxid3}', true),
                ('tetra', 'tetraid', '{vrtxid1,vrtxid2,vrtxid3,vrtxid4}', true),
-               ('times_vrtx', 'vrtxid', '{}', false), ('times_trgl', 'trglid', '{vrtxid1,vrtxid2,vrtxid3}', false))
+               ('times_vrtx', 'vrtxid', '{}', false), ('times_trgl', 'trglid', '{vrtxid1,vrtxid2,vrtxid3}', false),
+               ('d4dtrgl', 'trglid', '{nodeid1,nodeid2,nodeid3}', false), ('d4dvrtx', 'nodeid', '{}', false))
        AS c (tablename, chunkcolumn, chunkrefs, dflt)
  WHERE t.tablename = c.tablename;
 -- @handled model1/storage.sql

@@ -55,7 +55,8 @@ BEGIN
             PERFORM tgsis.check_merge_table_write(p_table, 'DELETE', p_geoid);
         END IF;
         IF cardinality(p_fresh) > 0 THEN
-            PERFORM tgsis.check_merge_table_write(p_table, 'INSERT', p_geoid, true);
+            -- (on the face, not the chunk table: the right the Python merge's tgsis.insert_chunk_rows asks)
+            PERFORM tgsis.check_merge_table_write(p_table, 'INSERT', p_geoid);
         END IF;
         IF coalesce(cardinality(p_gone), 0) + coalesce(cardinality(p_fresh), 0) = 0 THEN
             RETURN 0;

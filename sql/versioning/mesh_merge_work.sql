@@ -215,10 +215,11 @@ BEGIN
         v_table := 'd4dtrgl';
         v_cellid := 'trglid';
         v_k := 3;
-        v_vsrc := '(SELECT w.geoid, w.timem, w.timet, w.nodeid AS vrtxid, w.x, w.y, w.z, w.revision, w.revclosed, w.lastrevs
-                      FROM tgsis.d4dvrtx_ver w)';
-        v_csrc := '(SELECT w.geoid, w.timem, w.trglid, w.nodeid1 AS vrtxid1, w.nodeid2 AS vrtxid2, w.nodeid3 AS vrtxid3,
-                           w.revision, w.revclosed, w.lastrevs FROM tgsis.d4dtrgl_ver w)';
+        -- (decoded chunk versions when stored in chunks: tgsis.storage_row_versions)
+        v_vsrc := format('(SELECT w.geoid, w.timem, w.timet, w.nodeid AS vrtxid, w.x, w.y, w.z, w.revision, w.revclosed, w.lastrevs
+                             FROM %s w)', tgsis.storage_row_versions('tgsis', 'd4dvrtx'));
+        v_csrc := format('(SELECT w.geoid, w.timem, w.trglid, w.nodeid1 AS vrtxid1, w.nodeid2 AS vrtxid2, w.nodeid3 AS vrtxid3,
+                                  w.revision, w.revclosed, w.lastrevs FROM %s w)', tgsis.storage_row_versions('tgsis', 'd4dtrgl'));
         v_obj := format('v.geoid = $1 AND v.timem = %L::float8 AND v.timet = %L::float8', p_timem, p_times);
         v_cobj := format('v.geoid = $1 AND v.timem = %L::float8', p_timem);
     END IF;

@@ -358,7 +358,9 @@ def pytest_configure(config: pytest.Config) -> None:
 
 
 def time_storage() -> Literal["rows", "chunks"]:
-    """The storage of model 2's time tables (times_vrtx, times_trgl) in the templates: ``$TGSIS_TEST_TIME_STORAGE``.
+    """The storage of the time models' tables registered for chunks in the templates: ``$TGSIS_TEST_TIME_STORAGE``.
+
+    Model 2's times_vrtx and times_trgl, model 3's d4dtrgl and d4dvrtx (``tgsis.model_tables``).
 
     ``rows`` (the default, the product's) or ``chunks``: the templates' tables registered for chunks but not by
     default (``tgsis.model_tables.chunkdefault``) are then switched by ``tgsis.store_in_chunks`` after the install.
@@ -377,7 +379,7 @@ def time_storage() -> Literal["rows", "chunks"]:
 def _install_template(conn: psycopg.Connection[Any], method: Literal["extension", "sql"], storage: str) -> str:
     """Install tgsis into a template database with model 1 stored in ``storage``; the route taken.
 
-    Model 2's time tables are stored as :func:`time_storage` says.
+    The time models' tables (model 2's, model 3's) are stored as :func:`time_storage` says.
     """
     route = install(conn, method=method, storage="rows" if storage == "rows" else "chunks").method
     if time_storage() == "chunks":
@@ -508,7 +510,7 @@ def pytest_terminal_summary(terminalreporter: Any) -> None:
         f" (model 1 in: {', '.join(_SESSION.get('storages', [])) or 'no template made'}; default storage: "
         f"{default_storage()}"
         + (", the other one for every other file" if os.environ.get("TGSIS_TEST_STORAGE_BY_FILE") == "1" else "")
-        + ("; model 2's time tables in chunks" if time_storage() == "chunks" else "")
+        + ("; models 2 and 3's time tables in chunks" if time_storage() == "chunks" else "")
         + "); CREATE EXTENSION tgsis: "
         + ("available" if server.extension_files is None else f"NOT available ({server.extension_files})")
     )
