@@ -33,6 +33,16 @@ SECOND = (1.0, 2.0, 5.0)
 ASKED = (*FIRST, *SECOND, 0.15, 0.5, 1.5, 3.0, -1.0, 6.0, 0.0)
 
 
+@pytest.fixture(autouse=True)
+def _model3_as_rows(conn: Conn) -> None:
+    """Model 3's tables as rows at each test's start, whatever TGSIS_TEST_TIME_STORAGE made them: each test
+    switches them itself."""
+    for table in reversed(TABLES):
+        if conn.execute("SELECT tgsis.stored_in_chunks(%s)", (table,)).fetchone() == (True,):
+            conn.execute("SELECT tgsis.store_in_rows(%s)", (table,))
+    conn.commit()
+
+
 def _switch(conn: Conn, to: str) -> None:
     for table in TABLES if to == "chunks" else reversed(TABLES):
         conn.execute(f"SELECT tgsis.store_in_{to}(%s)", (table,))
