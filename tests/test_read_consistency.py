@@ -518,3 +518,42 @@ def test_the_chunk_download_with_commits_that_change_nothing_read_is_read_twice_
         for name, column in expected[table][ids.static].columns.items():
             assert np.array_equal(got[table][ids.static].columns[name], column)
     conn.rollback()
+
+
+def test_feature_properties_of_every_type_compare_across_two_tries(
+    conn: Conn, interleave: Callable[..., Interleave], unrelated: Callable[[], None]
+) -> None:
+    """numeric, date, timestamptz and jsonb feature properties come as Decimal, date, datetime and dicts: two tries
+    that read them alike are one state (before, Decimal and datetime compared as never the same: TG003)."""
+    import datetime
+    import decimal
+
+    tgsis.create_feature_class(
+        conn,
+        "typed",
+        "SURFACE",
+        feature_properties=[
+            ("grade", "numeric"),
+            ("day", "date"),
+            ("seen", "timestamptz"),
+            ("notes", "jsonb"),
+            ("label", "text"),
+        ],
+    )
+    surface = tgsis.Surface([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], name="one")
+    props = {
+        "grade": decimal.Decimal("1.50"),
+        "day": datetime.date(2026, 12, 7),
+        "seen": datetime.datetime(2026, 12, 7, 1, 2, 3, tzinfo=datetime.timezone.utc),
+        "notes": {"a": [1.5, None]},
+        "label": "x",
+    }
+    geoid = tgsis.insert_feature(conn, "typed", surface, props)
+    conn.commit()
+    expected = tgsis.fetch_features(conn, "typed", [geoid])[0].properties
+    conn.execute("SELECT 1")
+    hook = interleave(conn, unrelated, MARKERS, times=1000)
+    got = tgsis.fetch_features(conn, "typed", [geoid])[0].properties
+    assert got == expected and got["grade"] == decimal.Decimal("1.50")
+    assert hook.fired == 2
+    conn.rollback()

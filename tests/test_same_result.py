@@ -73,6 +73,22 @@ def test_containers_and_objects() -> None:
     assert {1, 2} == {2, 1} and same_result({1, 2}, {2, 1})
 
 
+def test_the_values_of_property_types_psycopg_returns() -> None:
+    """numeric, date and timestamptz properties come as Decimal and datetime (C types: no attributes to walk)."""
+    from datetime import date, datetime, timedelta, timezone
+    from decimal import Decimal
+
+    assert same_result(Decimal("1.50"), Decimal("1.50"))
+    assert not same_result(Decimal("1.5"), Decimal("1.50"))  # equal numbers, other scales: not the same value read
+    assert same_result(Decimal("NaN"), Decimal("NaN"))
+    assert not same_result(Decimal("0"), Decimal("-0"))
+    assert same_result(date(2026, 12, 7), date(2026, 12, 7))
+    assert not same_result(date(2026, 12, 7), date(2026, 12, 8))
+    utc = datetime(2026, 12, 7, 1, 0, tzinfo=timezone.utc)
+    assert same_result({"t": utc}, {"t": datetime(2026, 12, 7, 1, 0, tzinfo=timezone.utc)})
+    assert not same_result(utc, utc.astimezone(timezone(timedelta(hours=1))))  # the same instant, another zone
+
+
 def test_what_cannot_be_compared_is_different() -> None:
     one = Opaque()
     assert same_result(one, one)  # the very same object

@@ -11,7 +11,10 @@ without a way to say it equals another) counts as different: the read is run aga
 from __future__ import annotations
 
 import dataclasses
+import datetime
+import decimal
 import struct
+import uuid
 from collections.abc import Mapping
 from typing import Any
 
@@ -20,6 +23,9 @@ import numpy as np
 __all__ = ["same_result"]
 
 _PLAIN = (str, bytes, bytearray, memoryview, int, bool, type(None), complex)
+# values of the class properties' SQL types (numeric, date, timestamptz) and others psycopg returns, compared by
+# repr: exact (Decimal('NaN') and Decimal('-0'), a datetime's time zone), where == is not
+_BY_REPR = (decimal.Decimal, datetime.date, datetime.time, datetime.timedelta, uuid.UUID)
 
 
 def same_result(a: Any, b: Any) -> bool:
@@ -39,6 +45,8 @@ def same_result(a: Any, b: Any) -> bool:
         return _bits(a) == _bits(b)
     if isinstance(a, _PLAIN) or isinstance(a, np.generic):
         return bool(a == b)
+    if isinstance(a, _BY_REPR):
+        return repr(a) == repr(b)
     if isinstance(a, tuple | list):
         return len(a) == len(b) and all(same_result(x, y) for x, y in zip(a, b, strict=True))
     if isinstance(a, Mapping):
