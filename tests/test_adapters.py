@@ -11,7 +11,7 @@ from psycopg.types.multirange import Multirange
 from psycopg.types.range import Range
 
 import tgsis
-from tgsis.db.adapters import parse_cube
+from tgsis.db.adapters import parse_cube, unpack_cube
 
 
 def _surface(x0: float) -> tgsis.Surface:
@@ -44,6 +44,30 @@ def test_boxes_come_back_as_2_by_3_arrays(conn: psycopg.Connection[Any]) -> None
     np.testing.assert_array_equal(point, [[1, 2, 3], [1, 2, 3]])
     (null,) = conn.execute("SELECT NULL::cube").fetchone()  # type: ignore[misc]
     assert null is None
+
+
+def test_a_box_read_in_binary_is_bit_exact_whatever_extra_float_digits(conn: psycopg.Connection[Any]) -> None:
+    # 0.1 + 0.2 and 1/3 need 17 significant digits: the text form rounds them to 15 under extra_float_digits <= 0
+    tgsis.create_feature_class(conn, "rocks", "SURFACE")
+    vertices = np.array([[0.1 + 0.2, 1 / 3, -5000.000000000001], [7e-310, 3.7e6 + 1 / 3, -4000.25], [1e300, 2, 0]])
+    geoid = tgsis.insert_feature(conn, "rocks", tgsis.Surface(vertices, np.array([[0, 1, 2]])))
+    want = np.stack([vertices.min(axis=0), vertices.max(axis=0)])
+    tgsis.register_types(conn)
+    conn.execute("SET extra_float_digits = 0")
+    query = "SELECT bbox, ARRAY[bbox, bbox], cube(ARRAY[0.1::float8 + 0.2::float8, '-0'::float8]) FROM tgsis.geometry WHERE geoid = %s"
+    box, boxes, point = conn.execute(query, (geoid,), binary=True).fetchone()  # type: ignore[misc]
+    assert box.dtype == np.float64 and box.tobytes() == want.tobytes()  # bit for bit, -0.0 and subnormals too
+    assert len(boxes) == 2 and all(b.tobytes() == want.tobytes() for b in boxes)
+    assert point.tobytes() == np.array([[0.1 + 0.2, -0.0], [0.1 + 0.2, -0.0]]).tobytes()
+    (text_box,) = conn.execute("SELECT bbox FROM tgsis.geometry WHERE geoid = %s", (geoid,)).fetchone()  # type: ignore[misc]
+    assert not np.array_equal(text_box, want)  # what binary reads are for: the text form rounded
+    conn.execute("RESET extra_float_digits")
+
+
+@pytest.mark.parametrize("data", [b"", b"\x00\x00\x00", b"\x00\x00\x00\x00", b"\x00\x00\x00\x02" + bytes(24)])
+def test_a_bad_binary_cube_is_refused(data: bytes) -> None:
+    with pytest.raises(ValueError, match="not a binary cube"):
+        unpack_cube(data)
 
 
 def test_a_box_goes_in_as_a_cube(conn: psycopg.Connection[Any]) -> None:

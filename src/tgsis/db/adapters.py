@@ -9,7 +9,10 @@ give:
 
 * ``cube``: a ``(2, d)`` float64 array, row 0 the low corner, row 1 the high
   one (``d = 3`` for bounding boxes; a point cube gives two equal rows);
-  arrays of cubes give lists of them. A ``(2, d)`` array passed as a query
+  arrays of cubes give lists of them. Read in binary (``binary=True``) a
+  cube comes bit for bit; its text form rounds every coordinate to 15
+  significant digits in a session whose ``extra_float_digits`` is below 1
+  (PostgreSQL's default, 1, prints them exactly). A ``(2, d)`` array passed as a query
   parameter *where PostgreSQL expects a cube* is dumped back as one
   (:class:`CubeDumper` is registered for :class:`Box`, see there).
 * ``tgsis.timerange``: a :class:`psycopg.types.range.Range` of floats
@@ -29,6 +32,7 @@ import numpy as np
 import numpy.typing as npt
 import psycopg
 from psycopg.adapt import Buffer, Dumper, Loader
+from psycopg.pq import Format
 from psycopg.types import TypeInfo
 from psycopg.types.multirange import MultirangeInfo, register_multirange
 from psycopg.types.range import RangeInfo, register_range
@@ -36,7 +40,7 @@ from psycopg.types.range import RangeInfo, register_range
 from tgsis.arguments import checked
 from tgsis.errors import InstallationError, reraise
 
-__all__ = ["register_types", "Box", "CubeLoader", "CubeDumper", "parse_cube"]
+__all__ = ["register_types", "Box", "CubeLoader", "CubeBinaryLoader", "CubeDumper", "parse_cube", "unpack_cube"]
 
 _NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?|[-+]?(?:inf(?:inity)?|nan)", re.IGNORECASE)
 
@@ -91,6 +95,44 @@ class CubeLoader(Loader):
         return parse_cube(bytes(data).decode("ascii"))
 
 
+# cube's binary form (cube_send, cube 1.5): a big-endian int32 header, the dimension in its low 31 bits and
+# bit 31 set for a point (one corner sent), then the float8 coordinates, low corner first
+_CUBE_POINT_BIT = 0x80000000
+_CUBE_DIM_MASK = 0x7FFFFFFF
+
+
+def unpack_cube(data: bytes) -> npt.NDArray[np.float64]:
+    """The ``(2, d)`` corners of a cube's binary form (what ``cube_send`` writes), bit for bit.
+
+    Raises
+    ------
+    ValueError
+        If ``data`` is no cube's binary form.
+    """
+    if len(data) < 4:
+        raise ValueError(f"not a binary cube: {len(data)} bytes")
+    header = int.from_bytes(data[:4], "big")
+    dim, point = header & _CUBE_DIM_MASK, bool(header & _CUBE_POINT_BIT)
+    count = dim if point else 2 * dim
+    if dim < 1 or len(data) != 4 + 8 * count:
+        raise ValueError(f"not a binary cube: header {header:#x}, {len(data)} bytes")
+    corners = np.frombuffer(data, dtype=">f8", count=count, offset=4).astype(np.float64).reshape(-1, dim)
+    return np.concatenate([corners, corners]) if point else corners
+
+
+class CubeBinaryLoader(Loader):
+    """Loads a ``cube`` read in binary (``binary=True``) as its ``(2, d)`` float64 corners, bit for bit.
+
+    The text form rounds coordinates when the session's ``extra_float_digits``
+    is below 1; the binary one never does.
+    """
+
+    format = Format.BINARY
+
+    def load(self, data: Buffer) -> npt.NDArray[np.float64]:
+        return unpack_cube(bytes(data))
+
+
 class CubeDumper(Dumper):
     """Dumps a :class:`Box` as the text of a ``cube``."""
 
@@ -129,6 +171,7 @@ def register_types(conn: psycopg.Connection[Any] | psycopg.Cursor[Any]) -> None:
     cube = TypeInfo("cube", int(row[0]), int(array[0]) if array else 0)
     cube.register(conn)
     conn.adapters.register_loader(cube.oid, CubeLoader)
+    conn.adapters.register_loader(cube.oid, CubeBinaryLoader)
     dumper = type("BoxDumper", (CubeDumper,), {"oid": cube.oid})
     conn.adapters.register_dumper(Box, dumper)
     register_range(timerange, conn)
