@@ -476,12 +476,18 @@ def translate(exc: psycopg.Error) -> Error:
             "(in psql: SELECT tgsis.create_storage(); creates the storage tables)",
         )
     else:
-        err = class_for_sqlstate(sqlstate)(
-            message, sqlstate=sqlstate, detail=diag.message_detail, hint=diag.message_hint
-        )
+        hint = diag.message_hint
+        if sqlstate == "25006" and not hint:  # read_only_sql_transaction: the server says what, not where to write
+            hint = _READ_ONLY_HINT
+        err = class_for_sqlstate(sqlstate)(message, sqlstate=sqlstate, detail=diag.message_detail, hint=hint)
     err.__cause__ = exc
     return err
 
+
+_READ_ONLY_HINT = (
+    "this transaction may only read: on a hot standby (SELECT pg_is_in_recovery() says true) write on the primary;"
+    " else the session or transaction was made read only (default_transaction_read_only, SET TRANSACTION READ ONLY)"
+)
 
 _MISSING_TGSIS_RELATION = re.compile(r'^relation "tgsis\.[^"]+" does not exist$')
 
