@@ -61,7 +61,7 @@ def _class(conn: Conn, versioned: bool) -> None:
 def _shape(t: float) -> np.ndarray:
     """The curved grid at time t: hostile values (-0.0, a subnormal, 2.5e15 moving by a unit) among curved ones."""
     s = curved_surface(SIDE)
-    xyz = (
+    xyz: np.ndarray = (
         s.vertices
         + np.array([0.1 * t, 0.0, 0.0])
         + np.stack([np.zeros(SIDE * SIDE)] * 2 + [30.0 * np.sin(t + s.vertices[:, 0] / 500.0)], 1)

@@ -60,6 +60,7 @@ __all__ = [
     "instant_layout",
     "InstantKey",
     "instant_rows",
+    "repeated_corners",
     "upload_instants",
     "INSTANT_BLOCK_BITS",
 ]
@@ -790,9 +791,22 @@ def instant_rows(
 INSTANT_BLOCK_BITS = 8
 
 
+def repeated_corners(corners: Sequence[npt.NDArray[np.int64]]) -> npt.NDArray[np.bool_]:
+    """(m,) bool: the cells whose corners (k columns of (m,) vertex ids) name a vertex twice.
+
+    What the row tables' CHECK refuses (``<table>_distinct_vertices``, ``d4dtrgl_distinct_nodes``) and the
+    chunk tables have not: a client upload checks it (a mesh's cells changed after it was made).
+    Every pair of corners compared: k(k - 1)/2 passes, cheaper than sorting each row for k <= 4.
+    """
+    repeated = np.zeros(len(corners[0]) if corners else 0, dtype=bool)
+    for i in range(len(corners)):
+        for j in range(i + 1, len(corners)):
+            repeated |= corners[i] == corners[j]
+    return repeated
+
+
 def _repeated_refs(layout: ChunkTable, columns: Mapping[str, npt.NDArray[Any]]) -> None:
-    """Refuse a cell naming a vertex (node) twice: the row table's CHECK (``<table>_distinct_vertices``,
-    ``d4dtrgl_distinct_nodes``), which the chunk table has not (a mesh changed after it was checked).
+    """Refuse a cell naming a vertex (node) twice (:func:`repeated_corners`).
 
     Raises
     ------
@@ -800,10 +814,7 @@ def _repeated_refs(layout: ChunkTable, columns: Mapping[str, npt.NDArray[Any]]) 
         Naming the first such row (nothing is sent).
     """
     refs = [np.asarray(columns[c]) for c in layout.columns.ref_order]
-    repeated = np.zeros(len(refs[0]) if refs else 0, dtype=bool)
-    for i in range(len(refs)):
-        for j in range(i + 1, len(refs)):
-            repeated |= refs[i] == refs[j]
+    repeated = repeated_corners(refs)
     if repeated.any():
         row = int(np.flatnonzero(repeated)[0])
         raise InvalidGeometryError(
