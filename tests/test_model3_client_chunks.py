@@ -20,6 +20,7 @@ import pytest
 import tgsis
 from tests.merge_data import curved_surface
 from tests.sessions import Background, connect, wait_until_blocked
+from tests.test_model2_chunks import NAN_PAYLOAD, _bits, _insert_chunk_rows_calls, _surface_bits
 from tgsis.temporal import EvolvingSurface, TopologyPeriod
 
 Conn = psycopg.Connection[Any]
@@ -29,8 +30,6 @@ FIRST = (-0.0, 0.1 + 0.2, 1.0)
 SECOND = (1.0, 2.0, 5.0)
 #: at every geometry instant, between them, before, after, at the ends, near a boundary
 ASKED = (*FIRST, *SECOND, 0.15, 0.5, 0.999999999, 1.5, 3.0, 5.5, 6.0, -1.0, 0.0, 7.5)
-#: a NaN with a payload of its own (a property value: kept bit for bit)
-NAN_PAYLOAD = np.array([0x7FF8000000000123], dtype=np.int64).view(np.float64)[0]
 SIDE = 40  # 1,600 nodes a period: the second period's ids start inside a chunk (1600 = 1024 + 576)
 
 
@@ -87,20 +86,6 @@ def _surface() -> EvolvingSurface:
     return EvolvingSurface([_period(FIRST), _period(SECOND)], name="evolving fault")
 
 
-def _bits(values: Any) -> list[int]:
-    return np.ascontiguousarray(values, dtype=np.float64).view(np.int64).ravel().tolist()
-
-
-def _surface_bits(surface: tgsis.Surface | None) -> Any:
-    if surface is None:
-        return None
-    return (
-        _bits(surface.vertices),
-        surface.cells.tolist(),
-        sorted((k, _bits(v)) for k, v in surface.vertex_properties.items()),
-    )
-
-
 def _edits(conn: Conn, geoid: int) -> None:
     """psql edits through the faces: a node known at one geometry instant only, far above the others (a hole
     run; the interpolations around it leave it out), a triangle deleted; then a third period from Python."""
@@ -137,14 +122,6 @@ def _python_reads(conn: Conn, geoid: int) -> dict[str, Any]:
 def _send(value: float) -> bytes:
     """``float8send``'s bytes of a double."""
     return struct.pack(">d", value)
-
-
-def _insert_chunk_rows_calls(conn: Conn) -> int:
-    row = conn.execute(
-        "SELECT coalesce(sum(calls), 0) FROM pg_stat_xact_user_functions WHERE funcname = 'insert_chunk_rows'"
-    ).fetchone()
-    assert row is not None
-    return int(row[0])
 
 
 FACES = {
