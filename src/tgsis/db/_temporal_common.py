@@ -457,7 +457,9 @@ def get_at(
 ) -> Surface | None:
     """The surface of a feature at model time ``t``, or None when it does not exist then.
 
-    Computed in SQL (``tgsis.vertices_at``, ``tgsis.triangles_at``):
+    Computed in SQL (``tgsis.vertices_at``, ``tgsis.triangles_at``), or, for
+    time tables stored in chunks, from their chunks decoded here with the same
+    answer bit for bit (:func:`chunk_snapshot`):
     model 3 interpolates node positions linearly inside the topology period
     containing t; model 2 takes the instant the step ``convention`` chooses;
     a static surface is returned whatever t. Vertex order is the stored id
