@@ -537,3 +537,20 @@ def test_an_instant_deleted_and_added_again_in_one_transaction(conn: Conn, versi
     assert _surface_bits(at) == _surface_bits(series.surfaces[0])
     # a key visible already is still refused by name (the instant's row first: TG201)
     assert sqlstate(conn, "SELECT tgsis.add_instant(%s, 2.0)", (geoid,))[0] == "TG201"
+
+
+def test_a_surface_changed_into_a_degenerate_one_is_refused_by_name(conn: Conn) -> None:
+    """A triangle naming a vertex twice (changed after the surface was checked): the rows' CHECK
+    (times_trgl_distinct_vertices) refused it with a raw 23514, the chunk table has none: the client's upload
+    refuses it by name, nothing written."""
+    _class(conn, False)
+    _store(conn, "chunks")
+    series = _hostile_series(side=12)
+    series.surfaces[1].cells[3] = [2, 5, 2]
+    counts = "SELECT (SELECT count(*) FROM tgsis.geometry), (SELECT count(*) FROM tgsis.times_trgl_chunk)"
+    before = conn.execute(counts).fetchone()
+    conn.rollback()
+    with pytest.raises(tgsis.InvalidGeometryError, match=r"uses a vertex twice: \[2, 5, 2\]"):
+        tgsis.insert_feature(conn, "horizons", series)
+    conn.rollback()
+    assert conn.execute(counts).fetchone() == before

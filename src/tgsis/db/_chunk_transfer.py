@@ -41,7 +41,7 @@ from psycopg import sql
 
 from tgsis._chunks import CHUNK_SIZE, COPY_SIGNATURE, ChunkColumns, ChunkSet, encode, from_copy, to_copy
 from tgsis.db._transfer import Packed, PartRequest, Storage, consistent_read, read_only_snapshot, staged
-from tgsis.errors import AlreadyExistsError, DatabaseError, InvalidInputError, NotFoundError
+from tgsis.errors import AlreadyExistsError, DatabaseError, InvalidGeometryError, InvalidInputError, NotFoundError
 
 __all__ = [
     "ChunkTable",
@@ -58,8 +58,11 @@ __all__ = [
     "split_copy",
     "split_first_field",
     "instant_layout",
+    "InstantKey",
     "instant_rows",
+    "repeated_corners",
     "upload_instants",
+    "INSTANT_BLOCK_BITS",
 ]
 
 Conn = psycopg.Connection[Any]
@@ -150,16 +153,18 @@ def chunk_table(conn: Conn, table: str, *, instants: bool = False) -> ChunkTable
     Parameters
     ----------
     instants : bool
-        Expect model 2's key ``geoid, times, chunk`` (``times_vrtx``, ``times_trgl``: :func:`instant_rows`,
-        :func:`upload_instants`) instead of model 1's ``geoid, chunk``.
+        Expect a time table's key ``geoid, <instant keys>, chunk``, its instant keys one or more ``double
+        precision`` columns (model 2's ``times_vrtx``, ``times_trgl``: ``times``; model 3's ``d4dvrtx``:
+        ``timem, timet``, ``d4dtrgl``: ``timem``; :func:`instant_rows`, :func:`upload_instants`) instead of
+        model 1's ``geoid, chunk``. They are read from the catalog (the row table's primary key less its id).
 
     Raises
     ------
     NotFoundError
         ``tgsis.<table>_chunk`` does not exist (TG200).
     InvalidInputError
-        Its layout is not the one this client encodes (key ``geoid, chunk``, or ``geoid, times, chunk`` with
-        ``instants``; 1,024 ids per chunk).
+        Its layout is not the one this client encodes (key ``geoid, chunk``, or ``geoid``, ``double precision``
+        instant keys, ``chunk`` with ``instants``; 1,024 ids per chunk).
     """
     row = conn.execute(
         "SELECT to_regclass(format('tgsis.%%I', %s::text || '_chunk'))::oid, "
@@ -186,14 +191,17 @@ def chunk_table(conn: Conn, table: str, *, instants: bool = False) -> ChunkTable
     keys = names[: names.index("revision")] if "revision" in names else names
     arrays = [(n, t) for n, t in attributes if n not in keys and n not in _FIXED and not n.endswith("_wide")]
     refs = tuple(n for n, t in arrays if t == "integer[]")
-    instant = ("times",) if instants else ()
+    types = dict(attributes)
+    instant = tuple(keys[1:-1]) if instants else ()
     if (
         keys != ["geoid", *instant, "chunk"]
+        or (instants and not instant)
+        or any(types[k] != "double precision" for k in instant)
         or size != CHUNK_SIZE
         or any(t not in ("integer[]", "double precision[]") for _, t in arrays)
     ):
         raise InvalidInputError(
-            f"tgsis.{table}_chunk is not a {'model-2' if instants else 'model-1'} chunk table of {CHUNK_SIZE} ids "
+            f"tgsis.{table}_chunk is not a {'time' if instants else 'model-1'} chunk table of {CHUNK_SIZE} ids "
             "per chunk",
             detail=f"key {keys}, chunk size {size}, arrays {arrays}",
         )
@@ -684,11 +692,14 @@ def records_as_copy(data: bytes, count: int) -> bytes:
     return b"".join(out)
 
 
-# --------------------------------------------------------------------------- model 2's time tables (geoid, times, chunk)
+# --------------------------------------------------------------------------- the time tables of models 2 and 3
+
+#: what :func:`instant_rows` returns: per object and instant, ``(geoid, *instant keys)``, its rows
+InstantKey = tuple[float, ...]
 
 
 def instant_layout(conn: Conn, table: str, chunked: frozenset[str]) -> ChunkTable | None:
-    """The chunk table of model 2's ``tgsis.<table>`` (``times_vrtx``, ``times_trgl``) when its rows are read from it.
+    """The chunk table of a time table (``times_vrtx``, ``times_trgl``, ``d4dvrtx``, ``d4dtrgl``) when its rows are read from it.
 
     Parameters
     ----------
@@ -699,7 +710,8 @@ def instant_layout(conn: Conn, table: str, chunked: frozenset[str]) -> ChunkTabl
     -------
     ChunkTable or None
         None while the table is stored as rows, or for a role that may read the face but not the chunk
-        table (it reads through the face, decoded by the server, what it read before).
+        table (it reads through the face, decoded by the server, what it read before). Its
+        ``columns.instant`` are the instant keys (``("times",)``, ``("timem", "timet")``, ``("timem",)``).
     """
     if table not in chunked:
         return None
@@ -708,9 +720,9 @@ def instant_layout(conn: Conn, table: str, chunked: frozenset[str]) -> ChunkTabl
 
 
 def instant_rows(
-    conn: Conn, layout: ChunkTable, geoids: Sequence[int], instant: sql.Composable | None = None
-) -> dict[tuple[int, float], ObjectRows]:
-    """The rows of model 2's ``tgsis.<table>`` of objects ``geoids`` at their instants, from the chunks the session sees.
+    conn: Conn, layout: ChunkTable, geoids: Sequence[int], where: sql.Composable | None = None
+) -> dict[InstantKey, ObjectRows]:
+    """The rows of a time table (models 2 and 3) of objects ``geoids`` at their instants, from the chunks the session sees.
 
     One query: per object and instant the server joins the visible chunk versions' ``record_send`` values
     (the versioned views' test, :func:`_visible`; every chunk of unversioned storage) into one ``bytea``,
@@ -723,16 +735,16 @@ def instant_rows(
     layout : ChunkTable
         :func:`instant_layout`.
     geoids : sequence of int
-    instant : sql.Composable, optional
-        An SQL expression of the one instant read per object, in terms of the object's ``f.geoid`` (e.g.
-        ``tgsis.instant_at(f.geoid, t, convention)``: the snapshot's instant, chosen in the same query);
-        None: every instant.
+    where : sql.Composable, optional
+        An SQL condition choosing the instants read, in terms of the object's ``f.geoid`` and the chunk's
+        instant keys ``c.<key>`` (e.g. ``c.times = tgsis.instant_at(f.geoid, t, convention)``: the snapshot's
+        instant, chosen in the same query); None: every instant.
 
     Returns
     -------
-    dict of (int, float) to ObjectRows
-        Per object and instant with chunks (the instant as the chunks store it): ids ascending, the columns
-        in id order. An instant with no visible chunk is not in it.
+    dict of tuple to ObjectRows
+        Per ``(geoid, *instant keys)`` with chunks (the instant keys as the chunks store them): ids ascending,
+        the columns in id order. An instant with no visible chunk is not in it.
 
     Raises
     ------
@@ -743,15 +755,17 @@ def instant_rows(
     record = sql.SQL("record_send(ROW({}))").format(
         sql.SQL(", ").join(sql.SQL("c.{}").format(sql.Identifier(c)) for c in spec.select_columns())
     )
-    at = sql.SQL("") if instant is None else sql.SQL(" AND c.times = {}").format(instant)
+    at = sql.SQL("") if where is None else sql.SQL(" AND ({})").format(where)
+    keys = sql.SQL(", ").join(sql.SQL("c.{}").format(sql.Identifier(k)) for k in spec.instant)
     # grouped by blocks of chunks too: a bytea holds 1 GB at most, and array_send writes 4 bytes per element
     # more (a 40M-triangle instant in one value would pass it); the client joins an instant's blocks
     query = sql.SQL(
-        "SELECT f.geoid, a.times, a.n, a.v FROM unnest({geoids}::int8[]) AS f(geoid) "
-        "CROSS JOIN LATERAL (SELECT c.times, count(*) AS n, string_agg({record}, ''::bytea) AS v FROM {source} c "
-        "WHERE c.geoid = f.geoid{at} AND {visible} GROUP BY c.times, c.chunk >> {bits}) a"
+        "SELECT f.geoid, a.* FROM unnest({geoids}::int8[]) AS f(geoid) "
+        "CROSS JOIN LATERAL (SELECT {keys}, count(*) AS n, string_agg({record}, ''::bytea) AS v FROM {source} c "
+        "WHERE c.geoid = f.geoid{at} AND {visible} GROUP BY {keys}, c.chunk >> {bits}) a"
     ).format(
         geoids=sql.Literal(list(dict.fromkeys(int(g) for g in geoids))),
+        keys=keys,
         record=record,
         source=layout.relation,
         at=at,
@@ -760,14 +774,16 @@ def instant_rows(
     )
     with conn.cursor(binary=True) as cursor:
         groups = cursor.execute(query).fetchall()
-    blocks: dict[tuple[int, float], list[tuple[int, bytes]]] = {}
-    for geoid, times, count, data in groups:  # (an instant's -0.0 and 0.0 are one key, as the face groups them)
-        blocks.setdefault((int(geoid), float(times)), []).append((int(count), bytes(data)))
-    result: dict[tuple[int, float], ObjectRows] = {}
-    for (geoid, times), parts in blocks.items():
+    blocks: dict[InstantKey, list[tuple[int, bytes]]] = {}
+    k = len(spec.instant)
+    for row in groups:  # (an instant's -0.0 and 0.0 are one key, as the face groups them)
+        key = (int(row[0]), *(float(v) for v in row[1 : 1 + k]))
+        blocks.setdefault(key, []).append((int(row[1 + k]), bytes(row[2 + k])))
+    result: dict[InstantKey, ObjectRows] = {}
+    for key, parts in blocks.items():
         data = parts[0][1] if len(parts) == 1 else b"".join(d for _, d in parts)
         chunks = from_copy(records_as_copy(data, sum(n for n, _ in parts)), spec)
-        result[(geoid, times)] = _rows(geoid, chunks, spec)
+        result[key] = _rows(int(key[0]), chunks, spec)
     return result
 
 
@@ -775,26 +791,62 @@ def instant_rows(
 INSTANT_BLOCK_BITS = 8
 
 
+def repeated_corners(corners: Sequence[npt.NDArray[np.int64]]) -> npt.NDArray[np.bool_]:
+    """(m,) bool: the cells whose corners (k columns of (m,) vertex ids) name a vertex twice.
+
+    What the row tables' CHECK refuses (``<table>_distinct_vertices``, ``d4dtrgl_distinct_nodes``) and the
+    chunk tables have not: a client upload checks it (a mesh's cells changed after it was made).
+    Every pair of corners compared: k(k - 1)/2 passes, cheaper than sorting each row for k <= 4.
+    """
+    repeated = np.zeros(len(corners[0]) if corners else 0, dtype=bool)
+    for i in range(len(corners)):
+        for j in range(i + 1, len(corners)):
+            repeated |= corners[i] == corners[j]
+    return repeated
+
+
+def _repeated_refs(layout: ChunkTable, columns: Mapping[str, npt.NDArray[Any]]) -> None:
+    """Refuse a cell naming a vertex (node) twice (:func:`repeated_corners`).
+
+    Raises
+    ------
+    InvalidGeometryError
+        Naming the first such row (nothing is sent).
+    """
+    refs = [np.asarray(columns[c]) for c in layout.columns.ref_order]
+    repeated = repeated_corners(refs)
+    if repeated.any():
+        row = int(np.flatnonzero(repeated)[0])
+        raise InvalidGeometryError(
+            f"tgsis.{layout.table}: cell row {row} uses a vertex twice: {[int(r[row]) for r in refs]}",
+            detail=f"{int(repeated.sum())} cells repeat a vertex (the row table's CHECK of distinct vertices); "
+            "nothing was written",
+        )
+
+
 def upload_instants(
     conn: Conn,
     table: str,
     geoid: int,
-    times: Sequence[float],
+    instants: Sequence[InstantKey],
     counts: Sequence[int],
     columns: Mapping[str, npt.NDArray[Any]],
     storage: Storage,
+    first_ids: Sequence[int] | None = None,
 ) -> bool:
-    """Write new instants' rows of model 2's ``tgsis.<table>`` as chunk rows encoded here: one binary COPY.
+    """Write new instants' rows of a time table (models 2 and 3) as chunk rows encoded here: one binary COPY.
 
-    The model-2 upload (``insert_series``, ``add_instant``) of a time table stored in chunks, as model 1's
-    :func:`upload_chunks`: the rows of instant ``times[i]`` are ``counts[i]`` consecutive rows of
-    ``columns`` with ids ``0..counts[i]-1``; each instant's chunks are encoded by numpy with the instant's
-    bits as key and COPied into ``tgsis.<table>_chunk`` in the session's working revision (0 for
-    unversioned storage and features of classes without versioning) as the role (the chunk table's grants
-    and row-level security: the class's right; its insert trigger checks the encoding and, unversioned,
-    revision 0), after the checks ``tgsis.insert_chunk_rows`` makes of an existing object: not locked by
-    another version (TG303), its write lock taken (no face writer of it in flight). The object is noted
-    as changed in the working revision.
+    The upload of model 2 (``insert_series``, ``add_instant``: ``times_vrtx``, ``times_trgl``) and model 3
+    (``insert_evolving``, ``append_period``: ``d4dvrtx``, ``d4dtrgl``) into a time table stored in chunks, as
+    model 1's :func:`upload_chunks`: the rows of instant ``instants[i]`` (its instant keys, e.g. ``(times,)``
+    or ``(timem, timet)``) are ``counts[i]`` consecutive rows of ``columns`` with ids
+    ``first_ids[i] .. first_ids[i] + counts[i] - 1`` (default from 0); each instant's chunks are encoded by
+    numpy with the instant's bits as key and COPied into ``tgsis.<table>_chunk`` in the session's working
+    revision (0 for unversioned storage and features of classes without versioning) as the role (the chunk
+    table's grants and row-level security: the class's right; its insert trigger checks the encoding and,
+    unversioned, revision 0), after the checks ``tgsis.insert_chunk_rows`` makes of an existing object: the
+    row table's CHECK of distinct cell corners, not locked by another version (TG303), its write lock taken
+    (no face writer of it in flight). The object is noted as changed in the working revision.
 
     Returns
     -------
@@ -807,7 +859,10 @@ def upload_instants(
     Raises
     ------
     InvalidInputError
-        Columns that are not the table's, or values the codec refuses (nothing is sent).
+        Columns that are not the table's, instant keys that are not its, or values the codec refuses
+        (nothing is sent).
+    InvalidGeometryError
+        A cell naming one vertex twice (nothing is sent).
     NotVersionedError, ReadOnlyRevisionError
         The session may not write here.
     psycopg.errors.InsufficientPrivilege
@@ -818,37 +873,52 @@ def upload_instants(
         raise InvalidInputError(
             f"tgsis.{table}: an upload gives the columns {sorted(layout.columns.names)}, not {sorted(columns)}"
         )
+    keys_of = [tuple(float(v) for v in key) for key in instants]
+    width = len(layout.columns.instant)
+    if any(len(key) != width for key in keys_of) or len(counts) != len(keys_of):
+        raise InvalidInputError(
+            f"tgsis.{table}: each of the {len(counts)} instants is given by {list(layout.columns.instant)}",
+            detail=f"instants {keys_of[:5]}",
+        )
     storage.check("tgsis", table)
     versioned = ("tgsis", table) in storage.versioned
     revision = int(storage.revision or 0) if versioned else 0
+    _repeated_refs(layout, columns)
     starts = np.cumsum([0, *counts]).tolist()
+    firsts = [0] * len(counts) if first_ids is None else [int(f) for f in first_ids]
     encoded = [  # encode first: bad input is refused before anything is sent
-        encode(np.arange(n, dtype=np.int64), {k: v[start : start + n] for k, v in columns.items()}, layout.columns)
-        for start, n in zip(starts, counts)
+        encode(
+            np.arange(first, first + n, dtype=np.int64),
+            {k: v[start : start + n] for k, v in columns.items()},
+            layout.columns,
+        )
+        for start, n, first in zip(starts, counts, firsts)
     ]
-    instants = [float(t) for t in times]
-    if not instants:
+    if not keys_of:
         return True
-    keys = [str(int(geoid))]
+    objects = [str(int(geoid))]
     if versioned:
-        conn.execute("SELECT tgsis.check_objects_unlocked('feature', %s::text[])", (keys,))  # TG303
-    conn.execute("SELECT tgsis.object_write_lock('feature', %s::text[])", (keys,))  # no face writer of it in flight
+        conn.execute("SELECT tgsis.check_objects_unlocked('feature', %s::text[])", (objects,))  # TG303
+    conn.execute("SELECT tgsis.object_write_lock('feature', %s::text[])", (objects,))  # no face writer of it in flight
+    names = layout.columns.instant
     existing = conn.execute(  # (the instants' bits in binary: never through text)
-        sql.SQL("SELECT EXISTS (SELECT FROM {} c WHERE c.geoid = %s AND c.times = ANY (%b::float8[]))").format(
-            layout.relation
+        sql.SQL("SELECT EXISTS (SELECT FROM {} c WHERE c.geoid = %s AND ({}) IN (SELECT * FROM unnest({})))").format(
+            layout.relation,
+            sql.SQL(", ").join(sql.SQL("c.{}").format(sql.Identifier(k)) for k in names),
+            sql.SQL(", ").join(sql.SQL("%b::float8[]") for _ in names),
         ),
-        (int(geoid), instants),
+        (int(geoid), *([key[i] for key in keys_of] for i in range(width))),
     ).fetchone()
     if existing is None or existing[0]:
         return False
-    names = layout.columns.copy_columns()
+    copy_columns = layout.columns.copy_columns()
     statement = sql.SQL("COPY {} ({}) FROM STDIN (FORMAT binary)")
-    with staged(conn, layout.relation, names) as into:
-        with conn.cursor().copy(statement.format(into, sql.SQL(", ").join(map(sql.Identifier, names)))) as copy:
-            for k, (chunks, t) in enumerate(zip(encoded, instants)):
-                stream = to_copy(chunks, int(geoid), revision, (t,))
+    with staged(conn, layout.relation, copy_columns) as into:
+        with conn.cursor().copy(statement.format(into, sql.SQL(", ").join(map(sql.Identifier, copy_columns)))) as copy:
+            for k, (chunks, key) in enumerate(zip(encoded, keys_of)):
+                stream = to_copy(chunks, int(geoid), revision, key)
                 # one stream: the header once, the trailer once
                 copy.write(memoryview(stream)[19 if k else 0 : -2 if k < len(encoded) - 1 else None])
     if layout.versioned and revision != 0:
-        conn.execute("SELECT tgsis.record_changed_objects('tgsis', %s, %s::text[])", (table, keys))
+        conn.execute("SELECT tgsis.record_changed_objects('tgsis', %s, %s::text[])", (table, objects))
     return True

@@ -17,7 +17,7 @@ import psycopg
 from psycopg import sql
 
 from tgsis.arguments import no_nul
-from tgsis.db._chunk_transfer import ObjectRows, chunked_tables, rows_request, upload_chunks
+from tgsis.db._chunk_transfer import ObjectRows, chunked_tables, repeated_corners, rows_request, upload_chunks
 from tgsis.db._property_chunks import property_chunks, property_request, upload_properties, write_property_rows
 from tgsis.db._transfer import (
     Packed,
@@ -291,10 +291,7 @@ def simplex_rows(geoid: int, mesh: Mesh, table: str) -> ObjectRows:
     """
     cells = np.asarray(mesh.cells, dtype=np.int64)
     k = mesh.cell_size
-    repeated = np.zeros(len(cells), dtype=bool)
-    for i in range(k):
-        for j in range(i + 1, k):
-            repeated |= cells[:, i] == cells[:, j]
+    repeated = repeated_corners([cells[:, j] for j in range(k)])
     if repeated.any():
         row = int(np.flatnonzero(repeated)[0])
         raise InvalidGeometryError(

@@ -249,7 +249,9 @@ def instant_snapshot(
     layout = instant_layout(conn, table, chunked_tables(conn))
     if layout is None:
         return None
-    rows = instant_rows(conn, layout, geoids, sql.SQL("tgsis.instant_at(f.geoid, {}, {})").format(t, convention))
+    rows = instant_rows(
+        conn, layout, geoids, sql.SQL("c.times = tgsis.instant_at(f.geoid, {}, {})").format(t, convention)
+    )
     keys = sorted(rows)
     counts = [len(rows[k].ids) for k in keys]
     names = columns[1:]
@@ -261,6 +263,130 @@ def instant_snapshot(
             for c in names
         ),
     ]
+
+
+def _stacked(
+    objects: Sequence[tuple[int, npt.NDArray[np.int64], Sequence[npt.NDArray[Any]]]], dtypes: Sequence[Any]
+) -> list[npt.NDArray[Any]]:
+    """``[geoid, id, *columns]`` (n,) each from per-object ``(geoid, ids, columns)``, in the given object order."""
+    counts = [len(ids) for _, ids, _ in objects]
+    return [
+        np.repeat(np.asarray([g for g, _, _ in objects], dtype=np.int64), counts),
+        np.concatenate([np.empty(0, dtype=np.int64), *(ids for _, ids, _ in objects)]),
+        *(
+            np.concatenate([np.empty(0, dtype=dtype), *(columns[i] for _, _, columns in objects)])
+            for i, dtype in enumerate(dtypes)
+        ),
+    ]
+
+
+def evolving_vertices(conn: Conn, geoids: Sequence[int], t: sql.Composable) -> list[npt.NDArray[Any]] | None:
+    """Model 3's vertices at t of features ``geoids`` from ``d4dvrtx``'s chunks, interpolated here as ``tgsis.vertices_at`` does.
+
+    The frame (``tgsis.evolving_frame``: period, bracketing geometry instants t0 <= t <= t1, weight w) comes
+    in binary; the chunks of the two instants, chosen by the server in the same query from the same frame,
+    hold a node at the same slot (docs/storage.md, "Snapshots at t"), so ``x0 + w * (x1 - x0)`` is numpy on
+    aligned arrays: the same IEEE operations in the same order as the SQL, the same bits. Nodes present at
+    one of the two instants only (a psql delete) are left out, as the SQL's join leaves them out; at an
+    instant exactly (t0 = t1) the stored positions.
+
+    Returns
+    -------
+    list of ndarray or None
+        ``[geoid, vrtxid, x, y, z]`` (n,) each, ordered by (geoid, vrtxid); None while ``d4dvrtx`` is stored as
+        rows (or the role may read the face only): the caller reads the face.
+    """
+    layout = instant_layout(conn, "d4dvrtx", chunked_tables(conn))
+    if layout is None:
+        return None
+    wanted = list(dict.fromkeys(int(g) for g in geoids))
+    with conn.cursor(binary=True) as cursor:  # the frame's doubles by their bits
+        frames = cursor.execute(
+            sql.SQL(
+                "SELECT f.geoid, fr.timem, fr.t0, fr.t1, fr.w FROM unnest({}::int8[]) AS f(geoid) "
+                "CROSS JOIN LATERAL tgsis.evolving_frame(f.geoid, {}) fr ORDER BY f.geoid"
+            ).format(sql.Literal(wanted), t)
+        ).fetchall()
+    rows = instant_rows(
+        conn,
+        layout,
+        [int(f[0]) for f in frames],
+        sql.SQL(
+            "(c.timem, c.timet) IN (SELECT fr.timem, u.t FROM tgsis.evolving_frame(f.geoid, {}) fr, "
+            "unnest(ARRAY[fr.t0, fr.t1]) AS u(t))"
+        ).format(t),
+    )
+    columns = ("x", "y", "z")
+    objects = []
+    for geoid, timem, t0, t1, w in frames:
+        first = rows.get((int(geoid), float(timem), float(t0)))
+        if first is None:  # no node at that instant
+            continue
+        if not t0 < t1:  # at a geometry instant: the stored positions
+            objects.append((int(geoid), first.ids, [first.columns[c] for c in columns]))
+            continue
+        second = rows.get((int(geoid), float(timem), float(t1)))
+        if second is None:
+            continue
+        ids: npt.NDArray[np.int64] = first.ids
+        i0: Any = slice(None)  # aligned slot for slot: every node at both instants
+        i1: Any = slice(None)
+        if not np.array_equal(first.ids, second.ids):  # the nodes at both (the SQL's join)
+            ids, i0, i1 = np.intersect1d(first.ids, second.ids, assume_unique=True, return_indices=True)
+        weight = np.float64(w)
+        objects.append(
+            (
+                int(geoid),
+                ids,
+                [first.columns[c][i0] + weight * (second.columns[c][i1] - first.columns[c][i0]) for c in columns],
+            )
+        )
+    return _stacked(objects, [np.float64] * 3)
+
+
+def evolving_triangles(conn: Conn, geoids: Sequence[int], t: sql.Composable) -> list[npt.NDArray[Any]] | None:
+    """Model 3's triangles at t of features ``geoids`` from ``d4dtrgl``'s chunks of the period containing t.
+
+    The period is chosen by the server in the same query (``tgsis.evolving_frame``, as ``tgsis.triangles_at``).
+
+    Returns
+    -------
+    list of ndarray or None
+        ``[geoid, trglid, vrtxid1, vrtxid2, vrtxid3]`` (n,) each, ordered by (geoid, trglid), node ids as
+        vertex ids; None while ``d4dtrgl`` is stored as rows (or the role may read the face only).
+    """
+    layout = instant_layout(conn, "d4dtrgl", chunked_tables(conn))
+    if layout is None:
+        return None
+    rows = instant_rows(
+        conn,
+        layout,
+        geoids,
+        sql.SQL("c.timem = (SELECT fr.timem FROM tgsis.evolving_frame(f.geoid, {}) fr)").format(t),
+    )
+    names = ("nodeid1", "nodeid2", "nodeid3")
+    objects = [(key[0], rows[key].ids, [rows[key].columns[c] for c in names]) for key in sorted(rows)]
+    return _stacked([(int(g), i, c) for g, i, c in objects], [np.int64] * 3)
+
+
+def chunk_snapshot(
+    conn: Conn, model: str, geoids: Sequence[int], t: sql.Composable, convention: sql.Composable
+) -> tuple[list[npt.NDArray[Any]] | None, list[npt.NDArray[Any]] | None]:
+    """The vertices and triangles at t of features of time model ``model`` from their time tables' chunks.
+
+    Model 2: the instant's chunks (:func:`instant_snapshot`); model 3: the period's triangles and its two
+    geometry instants' node chunks, interpolated here (:func:`evolving_vertices`, :func:`evolving_triangles`).
+    Each is None while its table is stored as rows (or for another model): the caller reads the face.
+    ``convention`` is model 2's only (:func:`time_args` has checked it).
+    """
+    if model == "INSTANTS":
+        return (
+            instant_snapshot(conn, "times_vrtx", geoids, t, convention, ["vrtxid", "x", "y", "z"]),
+            instant_snapshot(conn, "times_trgl", geoids, t, convention, ["trglid", "vrtxid1", "vrtxid2", "vrtxid3"]),
+        )
+    if model == "EVOLVING":
+        return evolving_vertices(conn, geoids, t), evolving_triangles(conn, geoids, t)
+    return None, None
 
 
 def time_args(t: float, convention: str) -> tuple[sql.Literal, sql.Literal]:
@@ -331,7 +457,9 @@ def get_at(
 ) -> Surface | None:
     """The surface of a feature at model time ``t``, or None when it does not exist then.
 
-    Computed in SQL (``tgsis.vertices_at``, ``tgsis.triangles_at``):
+    Computed in SQL (``tgsis.vertices_at``, ``tgsis.triangles_at``), or, for
+    time tables stored in chunks, from their chunks decoded here with the same
+    answer bit for bit (:func:`chunk_snapshot`):
     model 3 interpolates node positions linearly inside the topology period
     containing t; model 2 takes the instant the step ``convention`` chooses;
     a static surface is returned whatever t. Vertex order is the stored id
@@ -362,20 +490,7 @@ def get_at(
             raise InvalidInputError(f"feature {feature_id} is a {row[2]}, not a surface")
         if not row[0]:
             return None
-        instants = row[3] == "INSTANTS"
-        # model 2 with its time tables in chunks: the instant's chunks, decoded here (no row built on the server)
-        vertices = (
-            instant_snapshot(conn, "times_vrtx", [feature_id], t_lit, c_lit, ["vrtxid", "x", "y", "z"])
-            if instants
-            else None
-        )
-        triangles = (
-            instant_snapshot(
-                conn, "times_trgl", [feature_id], t_lit, c_lit, ["trglid", "vrtxid1", "vrtxid2", "vrtxid3"]
-            )
-            if instants
-            else None
-        )
+        vertices, triangles = chunk_snapshot(conn, row[3], [feature_id], t_lit, c_lit)
         with _without_jit(conn):
             # packed by the server in groups of 1,024 ids (packed_out): a COPY message per row
             # cost most of the snapshot's time

@@ -24,7 +24,14 @@ from psycopg import sql
 from tgsis import datamodels
 from tgsis._zpositive import elevation, z_convention
 from tgsis.arguments import checked
-from tgsis.db._chunk_transfer import ObjectRows, chunked_tables, instant_layout, instant_rows, upload_instants
+from tgsis.db._chunk_transfer import (
+    InstantKey,
+    ObjectRows,
+    chunked_tables,
+    instant_layout,
+    instant_rows,
+    upload_instants,
+)
 from tgsis.db._cube import cube_name
 from tgsis.db._temporal_common import (
     Conn,
@@ -98,8 +105,9 @@ def _copy_instants(
     vertex_columns = {"x": xyz[:, 0], "y": xyz[:, 1], "z": xyz[:, 2]}
     # a time table stored in chunks takes the instants' chunks encoded here (one COPY), unless it holds chunks of
     # these instants already (a delete and add again in one revision: tgsis.insert_chunk_rows then)
+    instants = [(t,) for t in times]
     if ("tgsis", "times_vrtx") not in storage.chunked or not upload_instants(
-        conn, "times_vrtx", geoid, times, n, vertex_columns, storage
+        conn, "times_vrtx", geoid, instants, n, vertex_columns, storage
     ):
         storage.copy(
             conn,
@@ -114,7 +122,7 @@ def _copy_instants(
         )
     triangle_columns = {f"vrtxid{j + 1}": tri[:, j] for j in range(3)}
     if ("tgsis", "times_trgl") not in storage.chunked or not upload_instants(
-        conn, "times_trgl", geoid, times, m, triangle_columns, storage
+        conn, "times_trgl", geoid, instants, m, triangle_columns, storage
     ):
         storage.copy(
             conn,
@@ -271,7 +279,7 @@ def delete_instant(conn: Conn, feature_id: int, t: float) -> bool:
 
 
 def _instant_arrays(
-    rows: Mapping[tuple[int, float], ObjectRows], columns: Sequence[str], dtypes: Sequence[Any]
+    rows: Mapping[InstantKey, ObjectRows], columns: Sequence[str], dtypes: Sequence[Any]
 ) -> list[npt.NDArray[Any]]:
     """``[times, ids, *columns]`` (n,) each of one object's instants read from chunks, ordered by (times, id)."""
     keys = sorted(rows, key=lambda k: k[1])

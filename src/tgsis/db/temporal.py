@@ -26,7 +26,7 @@ from psycopg import sql
 
 from tgsis._series import check_time
 from tgsis.arguments import checked
-from tgsis.db._temporal_common import Conn, assemble_surface, get_at, instant_snapshot, lifespan, time_args
+from tgsis.db._temporal_common import Conn, assemble_surface, chunk_snapshot, get_at, lifespan, time_args
 from tgsis.db._transfer import class_name, consistent_read, packed_out, resolve_class, rows_by_geoid
 from tgsis.db.classes import FeatureClass
 from tgsis.db.evolving import append_period, delete_period, fetch_evolving, insert_evolving
@@ -118,13 +118,10 @@ def surfaces_at(
             conn.execute("SELECT geoid, geoname FROM tgsis.geometry WHERE geoid = ANY (%s)", (alive,)).fetchall()
         )
         wanted = sql.Literal(alive)
-        if fc.time_model == "INSTANTS":  # model 2 with its time tables in chunks: decoded here, else the face
-            vertices = instant_snapshot(conn, "times_vrtx", alive, t_lit, c_lit, ["vrtxid", "x", "y", "z"])
-            triangles = instant_snapshot(
-                conn, "times_trgl", alive, t_lit, c_lit, ["trglid", "vrtxid1", "vrtxid2", "vrtxid3"]
-            )
-            if vertices is not None and triangles is not None:
-                return alive, names, vertices, triangles
+        # models 2 and 3 with their time tables in chunks: decoded here, else the faces
+        vertices, triangles = chunk_snapshot(conn, fc.time_model, alive, t_lit, c_lit)
+        if vertices is not None and triangles is not None:
+            return alive, names, vertices, triangles
         vertices = packed_out(
             conn,
             sql.SQL(
