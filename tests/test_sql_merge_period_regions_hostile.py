@@ -21,15 +21,15 @@ from tests.merge_data import SIDE
 from tests.roles import merges_as
 from tests.test_merge_instants import CHILD_SHIFT, MIDDLE, NORTH, PARENT_SHIFT, SOUTH
 from tests.test_sql_merge_instant_regions import assert_same_regions
-from tests.test_sql_merge_periods import _move, _node_ids, _sql, make_periods
+from tests.test_sql_merge_periods import _move, _node_ids, _sql
 from tests.test_sql_merge_write import assert_same_merge, both_merges
 
 Conn = psycopg.Connection[Any]
 
 
 @pytest.fixture
-def periods(conn: Conn) -> int:
-    return make_periods(conn)
+def periods(conn: Conn, periods_clone: int) -> int:
+    return periods_clone  # make_periods's, built once (tests/conftest.py)
 
 
 def _conflict(conn: Conn, geoid: int, m: float, t: float) -> None:
@@ -212,14 +212,14 @@ def test_a_role_that_may_not_read_a_property_view_finds_the_regions_as_python(
 
 @pytest.mark.parametrize("table", ["horizons_cellpros", "horizons_pros"])
 def test_a_role_that_may_not_read_a_property_view_finds_the_regions_of_instants_as_python(
-    conn: Conn, db_dsn: str, table: str
+    conn: Conn, db_dsn: str, series_clone: int, table: str
 ) -> None:
     """The same for a surface at instants (model 2): the SQL find_conflicts stored its regions for that role."""
     from tests.roles import login_roles
-    from tests.test_merge_instants import make_series, move
+    from tests.test_merge_instants import move
     from tests.test_sql_merge_instant_regions import _stored
 
-    series = make_series(conn)
+    series = series_clone  # make_series's, built once (tests/conftest.py)
     move(conn, "e1", series, 2.0, NORTH, CHILD_SHIFT)
     move(conn, "DEFAULT", series, 2.0, NORTH[:SIDE], PARENT_SHIFT)
     with login_roles(db_dsn, {"ed": "tgsis_editor"}) as made:

@@ -48,15 +48,18 @@ def everything(conn: Conn) -> dict[str, list[tuple[str, ...]]]:
     ]
     tables += ["tgsis.revision_objects", "tgsis.versions", "tgsis.conflicts", "tgsis.conflict_regions"]
     found: dict[str, list[tuple[str, ...]]] = {}
+    # every table's columns in one query (one per table cost about 30 round trips per call: 4-5 % of the merge files)
+    named: dict[str, list[str]] = {
+        str(t): [str(c) for c in cs]
+        for t, cs in conn.execute(
+            "SELECT t.name, array_agg(a.attname::text ORDER BY a.attnum) FROM unnest(%s::text[]) AS t(name)"
+            " JOIN pg_attribute a ON a.attrelid = t.name::regclass AND a.attnum > 0 AND NOT a.attisdropped"
+            " AND format_type(a.atttypid, a.atttypmod) <> ALL (%s) GROUP BY t.name",
+            (tables, list(_TIMES)),
+        ).fetchall()
+    }
     for table in tables:
-        columns = [
-            str(c[0])
-            for c in conn.execute(
-                "SELECT attname FROM pg_attribute WHERE attrelid = %s::regclass AND attnum > 0 AND NOT attisdropped"
-                " AND format_type(atttypid, atttypmod) <> ALL (%s) ORDER BY attnum",
-                (table, list(_TIMES)),
-            ).fetchall()
-        ]
+        columns = named[table]
         rows = conn.execute(
             sql.SQL("SELECT {} FROM {}").format(
                 sql.SQL(", ").join(sql.SQL("{}::text").format(sql.Identifier(c)) for c in columns), sql.SQL(table)

@@ -1,6 +1,9 @@
 -- tgsis.triangles_at(geoid, t, convention): the triangles of a surface at model time t, pointing at the vrtxid of tgsis.vertices_at.
 -- The period comes from a scalar subquery (a constant to the planner, as in
 -- tgsis.vertices_at): an index scan of that period, not a scan of every period.
+-- So does model 2's instant: `times = tgsis.instant_at(...)` of a column
+-- (LATERAL over several geoids, as the Python readers call it) was a filter
+-- over the versioned view, run per row of every instant (tests/test_instant_at_once.py).
 CREATE FUNCTION tgsis.triangles_at(p_geoid bigint, p_t double precision, p_convention text DEFAULT 'left')
 RETURNS TABLE (trglid bigint, vrtxid1 bigint, vrtxid2 bigint, vrtxid3 bigint)
 LANGUAGE sql
@@ -14,7 +17,7 @@ AS $$
     UNION ALL
     SELECT c.trglid, c.vrtxid1, c.vrtxid2, c.vrtxid3
       FROM tgsis.times_trgl c
-     WHERE c.geoid = p_geoid AND c.times = tgsis.instant_at(p_geoid, p_t, p_convention)
+     WHERE c.geoid = p_geoid AND c.times = (SELECT tgsis.instant_at(p_geoid, p_t, p_convention))
     UNION ALL
     SELECT c.trglid, c.vrtxid1, c.vrtxid2, c.vrtxid3
       FROM tgsis.trgl c

@@ -11,7 +11,10 @@
 -- order, and the two sides merge-join (or hash-join) on nodeid. Joined to the
 -- frame instead, the planner could not bound d4dvrtx by the instants: it
 -- scanned every row of the table (all instants, all surfaces) into a hash
--- join (see docs/performance.md).
+-- join (see docs/performance.md). Model 2's instant too (a scalar subquery):
+-- compared as `times = tgsis.instant_at(f.geoid, ...)` under a LATERAL call it
+-- was a filter over the versioned view, run per row of every instant
+-- (tests/test_instant_at_once.py).
 CREATE FUNCTION tgsis.vertices_at(p_geoid bigint, p_t double precision, p_convention text DEFAULT 'left')
 RETURNS TABLE (vrtxid bigint, x double precision, y double precision, z double precision)
 LANGUAGE sql
@@ -36,7 +39,7 @@ AS $$
     UNION ALL
     SELECT v.vrtxid, v.x, v.y, v.z
       FROM tgsis.times_vrtx v
-     WHERE v.geoid = p_geoid AND v.times = tgsis.instant_at(p_geoid, p_t, p_convention)
+     WHERE v.geoid = p_geoid AND v.times = (SELECT tgsis.instant_at(p_geoid, p_t, p_convention))
     UNION ALL
     SELECT v.vrtxid, v.x, v.y, v.z
       FROM tgsis.vrtx v
