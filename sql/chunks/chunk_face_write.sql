@@ -96,6 +96,7 @@ DECLARE
     v_gone      text;
     v_changed   text;
     v_mine      boolean;
+    v_pair      bigint[];  -- an UPDATE's new and old object key, when they differ
     v_dupkey    text;      -- an inserted row's key that is there
     v_dec       record;    -- tgsis.chunk_decode_sql's pieces, the chunk table's alias c
     v_deletes   boolean;   -- the statement's rows delete some (the right checked: UPDATE, DELETE)
@@ -146,6 +147,18 @@ BEGIN
     -- row read); an UPDATE changing the key is a delete of the row read and an insert of the new row
     IF to_regclass('pg_temp.tgsis_face_rows') IS NULL THEN
         RETURN NULL;
+    END IF;
+    -- an UPDATE moving rows between a feature of a class without versioning and a versioned feature: TG300
+    -- (tgsis.unversioned_revision), as today's view refuses it, never two writes in two revisions
+    IF v_objclass = 'feature' AND EXISTS (SELECT FROM tgsis.unversioned_features) THEN
+        FOR v_pair IN EXECUTE format('SELECT DISTINCT ARRAY[(r.newrow::%1$s).%2$I, (r.oldrow::%1$s).%2$I]::bigint[] '
+                                     '  FROM pg_temp.tgsis_face_rows r WHERE r.face = $1 AND r.op = ''U'' '
+                                     '   AND (r.newrow::%1$s).%2$I IS DISTINCT FROM (r.oldrow::%1$s).%2$I', v_face, v_kc)
+                      USING TG_RELID LOOP
+            IF EXISTS (SELECT FROM tgsis.unversioned_features u WHERE u.geoid = ANY (v_pair)) THEN
+                PERFORM tgsis.unversioned_revision(v_pair);  -- TG300 when one of the two is versioned
+            END IF;
+        END LOOP;
     END IF;
     EXECUTE format('WITH kept AS (DELETE FROM pg_temp.tgsis_face_rows r WHERE r.face = $1 '
                    '                RETURNING r.op, r.newrow::%1$s AS n, r.oldrow::%1$s AS o), '
