@@ -7,7 +7,8 @@ rows), and commits; B then reads the class's properties or the model table (SQL 
 snapshot look EMPTY to that snapshot: before plan H, after the add and every switch, B's SQL read gave 0 rows
 without an error (the Python readers failed with TG102 / TG103, rows missing). Now the add rewrites nothing
 (B reads every row) and a switch's new chunk table refuses B with 40001 (retry), whose retry reads the rows.
-Left open, marked ``xfail(strict=True)``: the SQL read of the plain row table a switch back into rows makes.
+The way back into rows makes a plain row table, which cannot refuse an older snapshot: the switch itself is
+refused (TG202 naming the sessions) while such a snapshot is held, and that snapshot goes on reading the chunks.
 """
 
 from __future__ import annotations
@@ -146,25 +147,20 @@ def test_an_older_snapshot_reading_the_added_property_gets_40001_not_null(
 
 SWITCHES = {"into chunks": "store_class_in_chunks", "back into rows": "store_class_in_rows"}
 
-#: Left open (docs/storage.md): the way back into rows makes a plain table, which cannot refuse a snapshot older
-#: than it; such a snapshot reads it empty through SQL (PostgreSQL's caveat for a table made after a snapshot).
-ROWS_FACE_OPEN = pytest.mark.xfail(
-    strict=True, reason="a plain row table made after the snapshot reads empty through SQL: not guarded (open)"
-)
+
+def _refused_while_held(conn: Conn, call: str, reader: Conn) -> None:
+    """The way back into rows refuses (TG202, DETAIL naming the reader's pid) while ``reader``'s snapshot is older:
+    the plain row table it would make would read EMPTY to that snapshot (plan I, A). Nothing changed."""
+    with pytest.raises(psycopg.Error) as refused:
+        conn.execute(call)
+    assert refused.value.sqlstate == "TG202", refused.value
+    assert f"pid {reader.info.backend_pid} " in (refused.value.diag.message_detail or ""), refused.value.diag
+    assert refused.value.diag.message_hint
+    conn.rollback()
 
 
-def _read_params(switch_back: bool) -> list[Any]:
-    return [pytest.param(r, marks=ROWS_FACE_OPEN) if switch_back and r == "face" else r for r in READS]
-
-
-@pytest.mark.parametrize(
-    ("switch", "read"),
-    [
-        pytest.param(s, r, marks=ROWS_FACE_OPEN) if s == "back into rows" and r == "face" else (s, r)
-        for s in sorted(SWITCHES)
-        for r in READS
-    ],
-)
+@pytest.mark.parametrize("read", READS)
+@pytest.mark.parametrize("switch", sorted(SWITCHES))
 @pytest.mark.parametrize("versioned", [False, True], ids=["plain", "versioned"])
 def test_a_class_switched_after_the_snapshot_is_read_or_refused_never_empty(
     db_dsn: str, conn: Conn, versioned: bool, switch: str, read: str
@@ -174,15 +170,24 @@ def test_a_class_switched_after_the_snapshot_is_read_or_refused_never_empty(
         conn.execute("SELECT tgsis.store_class_in_chunks('layer')")
         conn.commit()
     reader = _old_snapshot(db_dsn)
-    conn.execute(f"SELECT tgsis.{SWITCHES[switch]}('layer')")
-    conn.commit()
     reads = _class_reads(reader, geoid)
-    got, state = _state(reader, reads[read])
-    if switch == "back into rows" and read != "face":
-        # a row table made after the snapshot: the Python readers find its rows missing and say so (TG103)
-        assert state is not None or got == (n, pytest.approx(total)), (got, state)
+    if switch == "back into rows":
+        # refused while the older snapshot is held; that snapshot goes on reading the chunks, every row
+        _refused_while_held(conn, f"SELECT tgsis.{SWITCHES[switch]}('layer')", reader)
+        got, state = _state(reader, reads[read])
+        assert state is None and got[0] == n and got[1] == pytest.approx(total), (got, state)
+        reader.commit()
+        conn.execute(f"SELECT tgsis.{SWITCHES[switch]}('layer')")  # the retry, once that snapshot is gone
+        conn.commit()
+        assert conn.execute("SELECT tgsis.stored_in_chunks('public', 'layer_cellpros')").fetchone() == (False,)
+        reader.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ")  # a snapshot after the switch
+        got = reads[read]()
+        assert got[0] == n and got[1] == pytest.approx(total)
         reader.close()
         return
+    conn.execute(f"SELECT tgsis.{SWITCHES[switch]}('layer')")
+    conn.commit()
+    got, state = _state(reader, reads[read])
     assert state in (None, "40001"), (got, state)
     if state is None:
         assert got[0] == n and got[1] == pytest.approx(total), "an older snapshot read the class's rows empty"
@@ -211,15 +216,21 @@ def _model_switch(db_dsn: str, conn: Conn, fault: int, call: str, read: str) -> 
     assert expected is not None and expected[0] > 0
     conn.commit()
     reader = _old_snapshot(db_dsn)
-    conn.execute(call)
-    conn.commit()
     reads = _model_reads(reader, fault)
-    got, state = _state(reader, reads[read])
-    if "store_in_rows" in call and read != "face":
-        # a row table made after the snapshot: the Python readers find the rows missing and say so (TG102)
-        assert state is not None or got == expected[0], (got, state)
+    if "store_in_rows" in call:
+        # refused while the older snapshot is held, which goes on reading the chunks; done once it is gone
+        _refused_while_held(conn, call, reader)
+        assert reads[read]() == expected[0]
+        reader.commit()
+        conn.execute(call)
+        conn.commit()
+        reader.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ")
+        assert reads[read]() == expected[0]
         reader.close()
         return
+    conn.execute(call)
+    conn.commit()
+    got, state = _state(reader, reads[read])
     assert state in (None, "40001"), (got, state)
     if state is None:
         assert got == expected[0], "an older snapshot read the model table's rows empty"
@@ -237,8 +248,71 @@ def test_a_model_table_switched_into_chunks_after_the_snapshot_is_read_or_refuse
 
 
 @pytest.mark.storage("chunks")
-@pytest.mark.parametrize("read", _read_params(True))
+@pytest.mark.parametrize("read", READS)
 def test_a_model_table_switched_back_into_rows_after_the_snapshot_is_read_or_refused(
     db_dsn: str, conn: Conn, fault_clone: int, read: str
 ) -> None:
     _model_switch(db_dsn, conn, fault_clone, "SELECT tgsis.store_in_rows('vrtx')", read)
+
+
+@pytest.mark.storage("chunks")
+@pytest.mark.parametrize("when", ["before the call", "after the call"])
+def test_a_snapshot_taken_inside_the_switch_back_refuses_it_at_the_latest_at_commit(
+    db_dsn: str, conn: Conn, fault_clone: int, when: str
+) -> None:
+    """A snapshot taken while the switch's transaction is open (before the call, or after it while the caller keeps
+    the transaction open) does not see the switch's commit either: TG202 from the call's last check or at COMMIT,
+    the switch rolled back, the chunks (and that snapshot's reads) kept; done once that snapshot is gone."""
+    expected = conn.execute("SELECT count(*) FROM tgsis.vrtx WHERE geoid = %s", (fault_clone,)).fetchone()
+    conn.commit()
+    conn.execute("SELECT pg_current_xact_id()")  # the switch's transaction has its xid
+    reader: Conn | None = None
+    if when == "before the call":
+        reader = _old_snapshot(db_dsn)
+    try:
+        conn.execute("SELECT tgsis.store_in_rows('vrtx')")
+        assert reader is None, "the switch ran under an older snapshot"
+        reader = _old_snapshot(db_dsn)
+        conn.commit()
+    except psycopg.Error as exc:
+        assert exc.sqlstate == "TG202", exc
+        assert reader is not None and f"pid {reader.info.backend_pid} " in (exc.diag.message_detail or "")
+        conn.rollback()
+    else:
+        raise AssertionError("the switch committed under an older snapshot")
+    assert conn.execute("SELECT tgsis.stored_in_chunks('vrtx')").fetchone() == (True,)
+    assert _model_reads(reader, fault_clone)["face"]() == expected[0]  # type: ignore[index]
+    reader.commit()
+    conn.execute("SELECT tgsis.store_in_rows('vrtx')")
+    conn.commit()
+    assert conn.execute("SELECT to_regclass('pg_temp.tgsis_older_snapshots')").fetchone() == (None,)
+    reader.execute("SET TRANSACTION ISOLATION LEVEL REPEATABLE READ")
+    assert _model_reads(reader, fault_clone)["face"]() == expected[0]  # type: ignore[index]
+    reader.close()
+
+
+@pytest.mark.storage("chunks")
+def test_a_writer_under_an_older_snapshot_loses_and_duplicates_nothing_across_the_way_back(
+    db_dsn: str, conn: Conn, fault_clone: int
+) -> None:
+    """A REPEATABLE READ writer through the face (an UPDATE, an INSERT) whose snapshot is older than the switch:
+    the switch is refused while it is open, its writes land in the chunks, and the way back after it carries them
+    once each."""
+    before = conn.execute("SELECT count(*), max(vrtxid) FROM tgsis.vrtx WHERE geoid = %s", (fault_clone,)).fetchone()
+    assert before is not None
+    conn.commit()
+    writer = _old_snapshot(db_dsn)
+    _refused_while_held(conn, "SELECT tgsis.store_in_rows('vrtx')", writer)
+    writer.execute("UPDATE tgsis.vrtx SET z = 1234.5 WHERE geoid = %s AND vrtxid = 0", (fault_clone,))
+    writer.execute(
+        "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, %s, 1, 2, 3)", (fault_clone, before[1] + 1)
+    )
+    writer.commit()
+    writer.close()
+    conn.execute("SELECT tgsis.store_in_rows('vrtx')")
+    conn.commit()
+    assert conn.execute(
+        "SELECT count(*), count(DISTINCT vrtxid), count(*) FILTER (WHERE z = 1234.5 AND vrtxid = 0)"
+        " FROM tgsis.vrtx WHERE geoid = %s",
+        (fault_clone,),
+    ).fetchone() == (before[0] + 1, before[0] + 1, 1)

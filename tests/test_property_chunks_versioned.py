@@ -504,9 +504,11 @@ def test_back_to_rows_after_compress_and_a_deleted_version_keeps_every_view(conn
     assert [r[3] for r in _layer(conn, "_idx = 1500")] == [70]
 
 
-def test_a_writer_waiting_on_the_way_back_writes_the_rows_after_it(db_dsn: str, conn: Conn) -> None:
-    """A psql write in e1 that waits for the way back's locks writes, once it commits, through the versioned view
-    on rows: its value in e1, nothing lost, DEFAULT unchanged."""
+def test_a_writer_waiting_on_the_way_back_refuses_it_and_writes_the_chunks(db_dsn: str, conn: Conn) -> None:
+    """A psql write in e1 that waits for the way back's locks holds a snapshot older than the switch's commit (the
+    statement's, taken before its lock wait; a REPEATABLE READ one would read the new row table empty): the way back
+    is refused at its COMMIT (TG202 naming the writer, plan I), the writer writes through the face on the chunks once
+    it goes on: its value in e1, nothing lost, DEFAULT unchanged; the way back done after it keeps them."""
     from tests.sessions import Background, connect, wait_until_blocked
 
     geoid, _ = _versioned_layer(conn)
@@ -519,15 +521,32 @@ def test_a_writer_waiting_on_the_way_back_writes_the_rows_after_it(db_dsn: str, 
     second = Background(db_dsn, "writer", writer, version="e1")
     wait_until_blocked(conn, second.pid, switcher.info.backend_pid)
     conn.rollback()
+    with pytest.raises(psycopg.Error) as refused:
+        switcher.commit()
+    assert refused.value.sqlstate == "TG202"
+    assert f"pid {second.pid} " in (refused.value.diag.message_detail or "")
+    second.finish()
+    assert conn.execute("SELECT tgsis.storage_table('public', 'layer_cellpros')").fetchone() == (
+        "public.layer_cellpros_chunk",
+    )
+    conn.rollback()
+
+    def values() -> tuple[list[Any], list[Any]]:
+        with tgsis.in_version(conn, "e1"):
+            in_e1 = [r[3] for r in _layer(conn, "_idx = 9")]
+        in_default = [r[3] for r in _layer(conn, "_idx = 9")]
+        conn.rollback()
+        return in_e1, in_default
+
+    assert values() == ([44], [9 % 7 - 3])  # on the chunks
+    switcher.execute("SELECT tgsis.store_class_in_rows('layer')")  # done: nobody holds an older snapshot now
     switcher.commit()
     switcher.close()
-    second.finish()
     assert conn.execute("SELECT tgsis.storage_table('public', 'layer_cellpros')").fetchone() == (
         "public.layer_cellpros_ver",
     )
-    with tgsis.in_version(conn, "e1"):
-        assert [r[3] for r in _layer(conn, "_idx = 9")] == [44]
-    assert [r[3] for r in _layer(conn, "_idx = 9")] == [9 % 7 - 3]
+    conn.rollback()
+    assert values() == ([44], [9 % 7 - 3])  # on rows
 
 
 def test_a_role_with_fewer_rights_cannot_go_back_and_keeps_its_rights_after(db_dsn: str, conn: Conn) -> None:

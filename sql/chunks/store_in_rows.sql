@@ -44,6 +44,8 @@ BEGIN
             USING ERRCODE = 'TG200', DETAIL = 'Only what tgsis.store_in_chunks stored goes back to rows.',
                   HINT = 'SELECT tablename FROM tgsis.model_tables WHERE tgsis.stored_in_chunks(tablename) lists them';
     END IF;
+    -- refused while another session's snapshot predates this transaction: it would read the row table EMPTY
+    PERFORM tgsis.older_snapshots_check(format('tgsis.store_in_rows(%L)', p_table));
     v_face := format('tgsis.%I', p_table)::regclass;
     v_shape := format('tgsis.%I', p_table || '_shape')::regclass;
     v_chunk := format('tgsis.%I', p_table || '_chunk')::regclass;
@@ -97,6 +99,10 @@ BEGIN
     IF v_versioned.tablename IS NOT NULL THEN
         PERFORM tgsis.renew_conflict_marks(v_marks);
     END IF;
+    -- again last, and at COMMIT: a snapshot taken while the switch ran, or before its transaction commits, would
+    -- read the new row table EMPTY as well
+    PERFORM tgsis.older_snapshots_check(format('tgsis.store_in_rows(%L)', p_table));
+    PERFORM tgsis.older_snapshots_at_commit(format('tgsis.store_in_rows(%L)', p_table));
     RETURN v_n;
 END
 $$;

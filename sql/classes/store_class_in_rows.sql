@@ -42,6 +42,8 @@ BEGIN
         RAISE EXCEPTION 'the properties of feature class % are not stored in chunks', coalesce(quote_literal(p_class), 'NULL')
             USING ERRCODE = 'TG200', DETAIL = 'Only what tgsis.store_class_in_chunks stored goes back to rows.';
     END IF;
+    -- refused while another session's snapshot predates this transaction: it would read the row table EMPTY
+    PERFORM tgsis.older_snapshots_check(format('tgsis.store_class_in_rows(%L)', p_class));
     SELECT * INTO v_versioned FROM tgsis.versioned_tables t
      WHERE t.schemaname = v_class.schemaname AND t.tablename = v_class.cellprotable;
     IF v_versioned.tablename IS NOT NULL THEN
@@ -88,6 +90,10 @@ BEGIN
         EXECUTE format('ANALYZE %I.%I', v_class.schemaname, v_class.cellprotable || '_ver');
         PERFORM tgsis.renew_conflict_marks(v_marks);
     END IF;
+    -- again last, and at COMMIT: a snapshot taken while the switch ran, or before its transaction commits, would
+    -- read the new row table EMPTY as well
+    PERFORM tgsis.older_snapshots_check(format('tgsis.store_class_in_rows(%L)', p_class));
+    PERFORM tgsis.older_snapshots_at_commit(format('tgsis.store_class_in_rows(%L)', p_class));
     RETURN v_n;
 END
 $$;

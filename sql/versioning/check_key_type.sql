@@ -4,7 +4,11 @@
 -- refuses such keys, but a table's owner can change the column's type
 -- afterwards; a domain's check or a cast of a type of its own would then be
 -- the owner's code run as tgsis's owner. So the definer code checks the type
--- again each time, before it casts.
+-- again each time, before it casts. A column missing because the storage was
+-- made after the transaction's snapshot (a storage switch: the snapshot sees
+-- no column of it, and would read it empty) is 40001 (retry), not TG100:
+-- tgsis.chunk_snapshot_guard says so first (find_conflicts under an older
+-- REPEATABLE READ snapshot; tests/test_old_snapshot_chunk_readers.py).
 CREATE FUNCTION tgsis.check_key_type(p_storage regclass, p_column text)
 RETURNS void
 LANGUAGE plpgsql
@@ -14,6 +18,9 @@ DECLARE
     v_type oid := (SELECT a.atttypid FROM pg_catalog.pg_attribute a
                     WHERE a.attrelid = p_storage AND a.attname = p_column AND NOT a.attisdropped);
 BEGIN
+    IF v_type IS NULL THEN
+        PERFORM tgsis.chunk_snapshot_guard(p_storage);  -- 40001 when the storage is newer than the snapshot
+    END IF;
     IF v_type IS NULL OR v_type >= 16384 THEN
         RAISE EXCEPTION 'the object key column % of % is %', quote_ident(p_column), p_storage,
                 CASE WHEN v_type IS NULL THEN 'missing' ELSE format('of type %s, which is not built into PostgreSQL',
@@ -26,4 +33,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.check_key_type(regclass, text) IS
-    'raise TG100 unless the object key column of a versioned table''s storage is of a built-in type (checked before definer code casts keys)';
+    'raise TG100 unless the object key column of a versioned table''s storage is of a built-in type (checked before definer code casts keys); 40001 instead when the column is missing because the storage was made after the transaction''s snapshot (tgsis.chunk_snapshot_guard)';

@@ -39,6 +39,11 @@
 -- subtransaction rolled back once the plan (the rows to close and to write) is
 -- in variables: neither they nor their locks outlive the call.
 -- extra_float_digits is pinned: values are compared as text, floats exactly.
+-- It takes the merge's locks itself first (tgsis.lock_version_pair: parent,
+-- then version, waiting for their writers; TG300 unless READ COMMITTED), as
+-- tgsis.merge_regions_in_sql has before calling it: called alone, it still
+-- reads the states after the writers it waited for and writes before any
+-- other writer of either side.
 CREATE FUNCTION tgsis.merge_mesh_by_region(p_version text, p_action text, p_geoid bigint)
 RETURNS bigint
 LANGUAGE plpgsql
@@ -119,7 +124,12 @@ DECLARE
     v_fcols    text[];
     v_unsolved boolean := false;
 BEGIN
-    SELECT * INTO v_version FROM tgsis.versions WHERE versionid = tgsis.version_id(p_version);
+    -- the merge's locks, taken here whoever calls (tgsis.merge_regions_in_sql took them already: taken again, no
+    -- wait): parent, then version, waiting for their writers (tgsis.lock_version_pair; TG300 unless READ
+    -- COMMITTED), so that the three states read below are what those writers committed, and no writer of either
+    -- side commits between the reads and the write (a write planned on a state a writer then changed would close
+    -- the writer's row version: its edit lost)
+    v_version := tgsis.lock_version_pair(p_version, p_action);
 
     -- the plan: the work tables in a subtransaction rolled back once the rows to write are in variables.
     -- The block's body is not indented.

@@ -20,7 +20,8 @@
 -- TRUNCATE change the file too: a snapshot older than them is refused as well
 -- (40001, retry; after TRUNCATE rightly). Executable by everyone: whoever may
 -- read a face runs it (a view's functions run with the reader's rights); it
--- tells nothing a role could not read in pg_class itself.
+-- tells nothing a role could not read in pg_class itself. In the versioning
+-- layer (it reads only the catalog): tgsis.check_key_type asks it too.
 CREATE FUNCTION tgsis.chunk_snapshot_guard(p_chunk regclass)
 RETURNS boolean
 LANGUAGE plpgsql
