@@ -486,7 +486,7 @@ def translate(exc: psycopg.Error) -> Error:
 
 _READ_ONLY_HINT = (
     "this transaction may only read: on a hot standby (SELECT pg_is_in_recovery() says true) write on the primary;"
-    " else the session or transaction was made read only (default_transaction_read_only, SET TRANSACTION READ ONLY)"
+    " else the session or the transaction was made read-only (default_transaction_read_only, SET TRANSACTION)"
 )
 
 _MISSING_TGSIS_RELATION = re.compile(r'^relation "tgsis\.[^"]+" does not exist$')
