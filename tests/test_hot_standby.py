@@ -98,6 +98,11 @@ def _standby_of(primary: LocalServer) -> LocalServer:
     if result.returncode != 0:
         shutil.rmtree(root, ignore_errors=True)
         raise AssertionError(f"pg_basebackup failed: {result.stdout}{result.stderr}")
+    # replay waits for the standby's queries rather than cancelling them: on a loaded machine the standby lags,
+    # and a lag beyond max_standby_streaming_delay (30 s) cancels a query at its first recovery conflict
+    # ("terminating connection due to conflict with recovery", a buffer pin: the whole suite met it)
+    with (standby.data_dir / "postgresql.auto.conf").open("a", encoding="utf-8") as conf:
+        conf.write("max_standby_streaming_delay = -1\nhot_standby_feedback = on\n")
     try:
         standby.start()
         standby.watch("throwaway")

@@ -12,7 +12,10 @@
 -- statement: every session of this database (or a physical walsender: a hot
 -- standby's feedback) whose backend_xmin is not after this transaction's xid
 -- holds a snapshot that may not see this transaction's commit; autovacuum is
--- left out (it reads no user's result). A READ COMMITTED session in the middle
+-- left out (it reads no user's result), and so are this session's own
+-- parallel workers (a query of the switch's verification can leave them
+-- listed, with this transaction's snapshot, for a moment after it ends:
+-- the whole suite on a loaded machine met it). A READ COMMITTED session in the middle
 -- of a statement counts too (its xmin is there only while a statement runs:
 -- retry). pg_stat_activity is read afresh (pg_stat_clear_snapshot: the
 -- backends' status is otherwise cached for the transaction).
@@ -38,6 +41,7 @@ BEGIN
       INTO v_sessions
       FROM pg_stat_activity a
      WHERE a.pid <> pg_backend_pid()
+       AND a.leader_pid IS DISTINCT FROM pg_backend_pid()  -- this session's own parallel workers, still exiting
        AND a.backend_xmin IS NOT NULL
        AND age(a.backend_xmin) >= age(v_xid)  -- backend_xmin <= this xid: that snapshot may not see this commit
        AND (a.datid = (SELECT d.oid FROM pg_database d WHERE d.datname = current_database())
