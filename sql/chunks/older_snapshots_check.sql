@@ -61,4 +61,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.older_snapshots_check(text) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.older_snapshots_check(text) IS
-    'TG202 naming the other sessions of this database (and physical walsenders) whose backend_xmin is not after this transaction''s xid: their snapshot would read a table this transaction makes EMPTY; called by tgsis.store_in_rows and tgsis.store_class_in_rows at their start and as their last statement; autovacuum left out';
+    'TG202 naming the other sessions of this database (and physical walsenders) whose backend_xmin is not after this transaction''s xid: their snapshot would read a table this transaction makes EMPTY; called by tgsis.store_in_rows and tgsis.store_class_in_rows at their start, as their last statement and at COMMIT (tgsis.older_snapshots_at_commit); autovacuum and this session''s own parallel workers left out';
