@@ -89,3 +89,22 @@ def test_connection_failures_are_database_errors() -> None:
     with pytest.raises(tgsis.DatabaseError) as info:
         tgsis.connect("host=/nonexistent-socket-dir port=1 dbname=x connect_timeout=2")
     assert "nonexistent-socket-dir" in str(info.value)
+
+
+def test_a_write_in_a_read_only_transaction_says_where_to_write(conn: psycopg.Connection[Any]) -> None:
+    """25006 carries no hint from the server; tgsis gives one (the hot standby's case: tests/test_hot_standby.py)."""
+    tgsis.create_feature_class(conn, "rocks", "SURFACE")
+    conn.commit()
+    conn.execute("SET default_transaction_read_only = on")
+    conn.commit()
+    surface = tgsis.Surface([[0.0, 0, 0], [1, 0, 0.5], [0, 1, 0.25]], [[0, 1, 2]])
+    with pytest.raises(tgsis.DatabaseError, match="read-only transaction") as caught:
+        tgsis.insert_feature(conn, "rocks", surface)
+    assert caught.value.sqlstate == "25006"
+    assert "write on the primary" in (caught.value.hint or "") and "default_transaction_read_only" in (
+        caught.value.hint or ""
+    )
+    conn.rollback()
+    conn.execute("SET default_transaction_read_only = off")
+    conn.commit()
+    assert tgsis.fetch_features(conn, "rocks") == []  # nothing stored
