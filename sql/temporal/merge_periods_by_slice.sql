@@ -260,7 +260,7 @@ BEGIN
     -- 3. per element of a slice a state has (a node at a geometry instant; a triangle of the period at each of its
     -- geometry instants): its geometry row with its property row at that instant (a missing one reads as NaN)
     INSERT INTO pg_temp.tgsis_mp_el
-    WITH nulls AS (  -- per kind, a property row of no value: one NaN per property column
+    WITH nulls AS MATERIALIZED (  -- per kind (once: not again per joined row), a property row of no value: one NaN per property column
         SELECT k.kind, coalesce((SELECT array_fill('NaN'::text, ARRAY[count(*)::integer])::text
                                    FROM pg_catalog.pg_attribute a, pg_temp.tgsis_mp_spec x
                                   WHERE x.tab = k.kind || 'p'

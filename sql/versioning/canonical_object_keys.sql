@@ -27,10 +27,11 @@ BEGIN
     END IF;
     FOR v_t IN
         SELECT DISTINCT ON (a.atttypid) t.schemaname, t.tablename, t.objectkeyfield, a.atttypid AS keytype,
-               tgsis.storage_table(t.schemaname, t.tablename)::regclass AS storage
+               s.rel AS storage
           FROM tgsis.versioned_tables t
+         CROSS JOIN LATERAL (SELECT tgsis.storage_table(t.schemaname, t.tablename)::regclass AS rel) s  -- once per table
           JOIN pg_catalog.pg_attribute a
-            ON a.attrelid = tgsis.storage_table(t.schemaname, t.tablename)::regclass
+            ON a.attrelid = s.rel
            AND a.attname = t.objectkeyfield AND NOT a.attisdropped
          WHERE t.objectclass = p_objectclass
          ORDER BY a.atttypid, t.schemaname, t.tablename

@@ -8,7 +8,7 @@ STABLE
 AS $$
     SELECT pg_catalog.format_type(a.atttypid, a.atttypmod)
       FROM pg_catalog.pg_attribute a
-     WHERE a.attrelid = tgsis.storage_table(p_t.schemaname, p_t.tablename)::regclass
+     WHERE a.attrelid = (SELECT tgsis.storage_table(p_t.schemaname, p_t.tablename)::regclass)  -- once, not per catalog row
        AND a.attname = p_t.objectkeyfield AND NOT a.attisdropped
 $$;
 

@@ -22,7 +22,7 @@ AS $$
     WITH RECURSIVE col AS (
         SELECT a.attnum, a.attname, a.atttypid AS typid
           FROM pg_catalog.pg_attribute a
-         WHERE a.attrelid = tgsis.storage_table(p_t.schemaname, p_t.tablename)::regclass
+         WHERE a.attrelid = (SELECT tgsis.storage_table(p_t.schemaname, p_t.tablename)::regclass)  -- once, not per catalog row
            AND a.attnum > 0 AND NOT a.attisdropped AND a.attgenerated = ''
            AND a.attname NOT IN ('revision', 'lastrevs')
         UNION ALL

@@ -15,8 +15,9 @@ BEGIN
         SELECT t AS tbl, t.schemaname, t.tablename, t.objectkeyfield, format_type(a.atttypid, a.atttypmod) AS keytype,
                a.atttypid AS keytypid
           FROM tgsis.versioned_tables t
+         CROSS JOIN LATERAL (SELECT tgsis.storage_table(t.schemaname, t.tablename)::regclass AS rel) s  -- once per table
           JOIN pg_catalog.pg_attribute a
-            ON a.attrelid = tgsis.storage_table(t.schemaname, t.tablename)::regclass AND a.attname = t.objectkeyfield
+            ON a.attrelid = s.rel AND a.attname = t.objectkeyfield
          WHERE t.objectclass = p_objectclass
     LOOP
         v_row := v_t.tbl;
