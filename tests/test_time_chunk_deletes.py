@@ -195,9 +195,9 @@ def test_delete_instant_under_a_snapshot_older_than_the_switch_is_40001(db_dsn: 
 
 @pytest.mark.parametrize("versioned", [False, True])
 def test_delete_period_on_chunks_answers_as_on_rows(conn: Conn, versioned: bool) -> None:
+    from tests.test_model3_chunks import TABLES, _insert
     from tests.test_model3_chunks import _answers as answers3
     from tests.test_model3_chunks import _class as class3
-    from tests.test_model3_chunks import TABLES, _insert
     from tests.test_model3_chunks import _switch as switch3
 
     for table in reversed(TABLES):  # model 3 as rows first, whatever TGSIS_TEST_TIME_STORAGE made it
@@ -224,3 +224,64 @@ def test_delete_period_on_chunks_answers_as_on_rows(conn: Conn, versioned: bool)
     on_rows = delete_and_read()
     switch3(conn, "chunks")
     assert delete_and_read() == on_rows
+
+
+# --------------------------------------------------------------------------- the merge's deletes (check-in likewise)
+
+
+def _function_calls(conn: Conn, names: tuple[str, ...]) -> dict[str, int]:
+    """Calls of tgsis functions counted by the server so far (this session's flushed first)."""
+    conn.execute("SELECT pg_stat_force_next_flush()")
+    conn.commit()
+    conn.execute("SELECT pg_stat_clear_snapshot()")
+    rows = conn.execute(
+        "SELECT funcname, calls FROM pg_stat_user_functions WHERE schemaname = 'tgsis' AND funcname = ANY (%s)",
+        (list(names),),
+    ).fetchall()
+    conn.commit()
+    return {n: dict(rows).get(n, 0) for n in names}
+
+
+@pytest.mark.parametrize("storage", ["rows", "chunks"])
+def test_a_merge_deleting_rows_of_an_instant_writes_chunks_set_based(conn: Conn, storage: str) -> None:
+    """The child moves vertices and deletes a triangle at an instant, the parent moves others: the merge writes
+    the difference into DEFAULT, its deletes in one ``tgsis.delete_chunk_rows`` per table on chunks (no face
+    trigger), the same rows as on rows."""
+    from tests.test_merge_instants import (
+        CHILD_SHIFT,
+        NORTH,
+        PARENT_SHIFT,
+        SOUTH,
+        TIMES,
+        _cells,
+        _shape,
+        instants,
+        make_series,
+        move,
+        shifted,
+    )
+
+    _store(conn, storage)
+    geoid = make_series(conn)
+    move(conn, "e1", geoid, 2.0, NORTH, CHILD_SHIFT)
+    with tgsis.in_version(conn, "e1"):
+        conn.execute("DELETE FROM tgsis.times_trgl WHERE geoid = %s AND times = 2.0 AND trglid = 7", (geoid,))
+    conn.commit()
+    move(conn, "DEFAULT", geoid, 2.0, SOUTH, PARENT_SHIFT)
+    conn.execute("SET track_functions = 'all'")
+    names = ("chunk_face_write", "delete_chunk_rows", "insert_chunk_rows")
+    before = _function_calls(conn, names)
+    result = tgsis.merge_version(conn, "e1")
+    assert [(o.objectkey, o.how) for o in result.objects] == [(str(geoid), "automatic")]
+    calls = {n: c - before[n] for n, c in _function_calls(conn, names).items()}
+    if storage == "chunks":
+        assert calls["chunk_face_write"] == 0, calls
+        assert calls["delete_chunk_rows"] >= 1, calls
+    else:
+        assert calls == {n: 0 for n in names}
+    got = instants(conn, "DEFAULT", geoid)
+    expected = shifted(shifted(_shape(1), NORTH, CHILD_SHIFT), SOUTH, PARENT_SHIFT)
+    assert got[2.0][1].tobytes() == expected.tobytes()
+    assert got[2.0][2] == {c for c in _cells() if c[0] != 7}
+    assert [got[t][2] == _cells() for t in TIMES] == [True, False, True]
+    assert conn.execute("SELECT * FROM tgsis.check_temporal_geometry(%s)", (geoid,)).fetchall() == []
