@@ -285,3 +285,41 @@ def test_a_merge_deleting_rows_of_an_instant_writes_chunks_set_based(conn: Conn,
     assert got[2.0][2] == {c for c in _cells() if c[0] != 7}
     assert [got[t][2] == _cells() for t in TIMES] == [True, False, True]
     assert conn.execute("SELECT * FROM tgsis.check_temporal_geometry(%s)", (geoid,)).fetchall() == []
+
+
+def test_delete_chunk_rows_deletes_the_visible_keys_and_refuses_bad_arguments(db_dsn: str, conn: Conn) -> None:
+    from tests.roles import login_roles
+
+    _class(conn, True)
+    _store(conn, "chunks")
+    geoid = _series(conn)
+    call = "SELECT tgsis.delete_chunk_rows('times_vrtx', '{geoid,vrtxid,times}', %s::bigint[], %s::float8[])"
+    before = _answers(conn, geoid)
+    for args in (
+        ([[geoid], [1]], None),  # times missing
+        ([[geoid, geoid], [1, 2]], [[2.0]]),  # floats shorter than the keys
+        ([[geoid], [1], [3]], [[2.0]]),  # a bigint column too many
+    ):
+        assert sqlstate(conn, call, args)[0] == "TG100", args
+    assert sqlstate(conn, call.replace("'times_vrtx'", "'vrtx'"), ([[geoid], [1]], [[2.0]]))[0] == "TG100"
+    assert _answers(conn, geoid) == before
+    with login_roles(db_dsn, {"reader": "tgsis_reader"}) as roles:
+        reader = roles.connect("reader")
+        assert sqlstate(reader, call, ([[geoid], [1]], [[2.0]]))[0] == "42501"
+        reader.close()
+    assert _answers(conn, geoid) == before
+    # one key there, one not: the one there goes, the count says one
+    # (a triangle: a vertex of triangles cannot go, TG at commit as on rows)
+    row = conn.execute(
+        call.replace("'times_vrtx', '{geoid,vrtxid,times}'", "'times_trgl', '{geoid,trglid,times}'"),
+        ([[geoid, geoid], [1, 99999]], [[2.0, 2.0]]),
+    ).fetchone()
+    conn.commit()
+    assert row == (1,)
+    left = conn.execute(
+        "SELECT trglid FROM tgsis.times_trgl WHERE geoid = %s AND times = 2.0 AND trglid < 3 ORDER BY 1", (geoid,)
+    ).fetchall()
+    assert left == [(0,), (2,)]
+    after = _answers(conn, geoid)
+    assert after["triangles_at -0.0"] == before["triangles_at -0.0"]
+    assert len(after["triangles_at 2.0"]) == len(before["triangles_at 2.0"]) - 1
