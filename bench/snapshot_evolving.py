@@ -49,7 +49,7 @@ def through_faces() -> Iterator[None]:
     with (
         mock.patch("tgsis.db._temporal_common.evolving_vertices", return_value=None),
         mock.patch("tgsis.db._temporal_common.evolving_triangles", return_value=None),
-        mock.patch("tgsis.db.evolving.upload_instants", return_value=False),
+        mock.patch("tgsis.db._chunk_transfer.upload_instants", return_value=False),
     ):
         yield
 

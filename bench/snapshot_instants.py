@@ -10,7 +10,11 @@ the default). Timed in one process and database, in turn (medians):
 - the snapshot at t (``get_at``) at an instant and between the two (the step
   convention takes one instant's surface: the same bytes), and the whole
   series (``fetch_series``);
-- the upload of the series (``insert_series``) vs the static upload.
+- the upload of the series (``insert_series``) vs the static upload;
+- ``tgsis.delete_instant`` of one instant on chunks (its chunk versions
+  closed whole, ``tgsis.delete_chunk_slice``) vs the same on rows (the time
+  tables switched back with ``tgsis.store_in_rows``, a second copy of the
+  series deleted there), once each.
 
 Each model-2 figure twice: the client's chunk paths (the instants' chunks
 encoded and decoded by numpy, ``tgsis.db._chunk_transfer.instant_rows`` /
@@ -49,7 +53,7 @@ def through_faces() -> Iterator[None]:
     with (
         mock.patch("tgsis.db._temporal_common.instant_snapshot", return_value=None),
         mock.patch("tgsis.db.instants.instant_layout", return_value=None),
-        mock.patch("tgsis.db.instants.upload_instants", return_value=False),
+        mock.patch("tgsis.db._chunk_transfer.upload_instants", return_value=False),
     ):
         yield
 
@@ -94,6 +98,7 @@ def main() -> None:
 
         up_static = once(lambda: upload("static", "static_grid", static))
         up_chunks = once(lambda: upload("chunks", "instants_grid", series))
+        upload("rows", "instants_grid", series)  # deleted from on rows at the end
         up_faces = float("nan")
         if args.faces_upload:
             with through_faces():
@@ -103,7 +108,10 @@ def main() -> None:
             conn.execute(f"VACUUM ANALYZE tgsis.{table}")
         conn.autocommit = False
 
-        for key in ids.keys() - {"static"}:  # the figures are of correct snapshots, and both uploads stored the same
+        for key in ids.keys() - {
+            "static",
+            "rows",
+        }:  # the figures are of correct snapshots, and both uploads stored the same
             for t, k in ((0.0, 0), (0.5, 0), (1.0, 1)):
                 for path in (contextlib.nullcontext(), through_faces()):
                     with path:
@@ -142,6 +150,11 @@ def main() -> None:
             ],
             args.repeat,
         )
+        # delete_instant: on chunks, then on rows (the time tables switched back), one instant of a series each
+        del_chunks = once(lambda: (tgsis.delete_instant(conn, ids["chunks"], 0.0), conn.commit()))
+        conn.execute("SELECT tgsis.store_in_rows('times_trgl'), tgsis.store_in_rows('times_vrtx')")
+        conn.commit()
+        del_rows = once(lambda: (tgsis.delete_instant(conn, ids["rows"], 0.0), conn.commit()))
 
     print(f"upload, static surface (insert_feature):            {up_static:6.2f} s")
     print(
@@ -160,6 +173,10 @@ def main() -> None:
             f"{name:27s} client chunks {chunks:6.2f} s ({chunks / static_down:.2f}x static), "
             f"faces {faces:6.2f} s ({faces / static_down:.2f}x static)"
         )
+    print(
+        f"delete_instant of one instant: chunks {del_chunks:6.2f} s, rows {del_rows:6.2f} s "
+        f"({del_chunks / del_rows:.2f}x rows)"
+    )
     print(f"static_download_s: {static_down:.3f}")
     print(f"snapshot_instant_chunks_vs_static: {at_chunks / static_down:.2f}")
     print(f"snapshot_between_chunks_vs_static: {mid_chunks / static_down:.2f}")
@@ -170,6 +187,8 @@ def main() -> None:
     print(f"static_upload_s: {up_static:.3f}")
     print(f"series_upload_chunks_vs_static: {up_chunks / up_static:.2f}")
     print(f"series_upload_faces_vs_static: {up_faces / up_static:.2f}")
+    print(f"delete_instant_rows_s: {del_rows:.3f}")
+    print(f"delete_instant_chunks_vs_rows: {del_chunks / del_rows:.2f}")
 
 
 if __name__ == "__main__":

@@ -239,13 +239,14 @@ def test_a_role_reads_and_writes_chunks_with_its_own_rights(db_dsn: str, conn: C
     from tests.roles import login_roles
 
     uploads: list[tuple[str, bool]] = []
+    real = chunk_transfer.upload_instants
 
     def spy(connection: Conn, table: str, *args: Any, **kwargs: Any) -> bool:
-        done = chunk_transfer.upload_instants(connection, table, *args, **kwargs)
+        done = real(connection, table, *args, **kwargs)
         uploads.append((table, done))
         return done
 
-    monkeypatch.setattr("tgsis.db.evolving.upload_instants", spy)
+    monkeypatch.setattr("tgsis.db._chunk_transfer.upload_instants", spy)  # (write_instants calls it)
 
     _class(conn, True)
     _store(conn, "chunks")

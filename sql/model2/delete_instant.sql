@@ -1,5 +1,8 @@
 -- tgsis.delete_instant(geoid, t): remove one instant of a model-2 surface with its vertices, triangles and properties.
--- Refuses (TG202) the only instant: that is deleting the feature.
+-- Refuses (TG202) the only instant: that is deleting the feature. A time
+-- table stored in chunks loses the instant's chunk versions whole
+-- (tgsis.delete_chunk_slice: the face's checks, one statement), not a chunk
+-- rewrite per row through the face; the class's property tables stay rows.
 CREATE FUNCTION tgsis.delete_instant(p_geoid bigint, p_t double precision)
 RETURNS boolean
 LANGUAGE plpgsql
@@ -22,8 +25,17 @@ BEGIN
         EXECUTE format('DELETE FROM %I.%I WHERE _geoid = $1 AND _times = $2', v_class.schemaname, v_class.protablename)
           USING p_geoid, p_t;
     END LOOP;
-    DELETE FROM tgsis.times_trgl WHERE geoid = p_geoid AND times = p_t;
-    DELETE FROM tgsis.times_vrtx WHERE geoid = p_geoid AND times = p_t;
+    -- a time table in chunks: the instant's chunk versions closed whole (not a chunk rewrite per row)
+    IF tgsis.stored_in_chunks('times_trgl') THEN
+        PERFORM tgsis.delete_chunk_slice('times_trgl', p_geoid, ARRAY[p_t]);
+    ELSE
+        DELETE FROM tgsis.times_trgl WHERE geoid = p_geoid AND times = p_t;
+    END IF;
+    IF tgsis.stored_in_chunks('times_vrtx') THEN
+        PERFORM tgsis.delete_chunk_slice('times_vrtx', p_geoid, ARRAY[p_t]);
+    ELSE
+        DELETE FROM tgsis.times_vrtx WHERE geoid = p_geoid AND times = p_t;
+    END IF;
     DELETE FROM tgsis.times WHERE geoid = p_geoid AND times = p_t;
     PERFORM tgsis.refresh_geometry(p_geoid);
     RETURN true;

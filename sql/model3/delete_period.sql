@@ -4,7 +4,9 @@
 -- gap (TG202), and the only one is the whole feature (TG202). With the last
 -- period gone the surface ends at the last geometry instant of the one
 -- before (alive or not as before); with the first gone it starts where the
--- second starts. Returns false when no period starts at timem.
+-- second starts. Returns false when no period starts at timem. A time
+-- table stored in chunks (d4dvrtx, d4dtrgl) loses the period's chunk versions
+-- whole (tgsis.delete_chunk_slice), not a chunk rewrite per row.
 CREATE FUNCTION tgsis.delete_period(p_geoid bigint, p_timem double precision)
 RETURNS boolean
 LANGUAGE plpgsql
@@ -41,8 +43,17 @@ BEGIN
         EXECUTE format('DELETE FROM %I.%I WHERE _geoid = $1 AND _timem = $2', v_class.schemaname, v_class.protablename)
           USING p_geoid, p_timem;
     END LOOP;
-    DELETE FROM tgsis.d4dvrtx WHERE geoid = p_geoid AND timem = p_timem;
-    DELETE FROM tgsis.d4dtrgl WHERE geoid = p_geoid AND timem = p_timem;
+    -- a time table in chunks: the period's chunk versions closed whole (not a chunk rewrite per row)
+    IF tgsis.stored_in_chunks('d4dvrtx') THEN
+        PERFORM tgsis.delete_chunk_slice('d4dvrtx', p_geoid, ARRAY[p_timem]);
+    ELSE
+        DELETE FROM tgsis.d4dvrtx WHERE geoid = p_geoid AND timem = p_timem;
+    END IF;
+    IF tgsis.stored_in_chunks('d4dtrgl') THEN
+        PERFORM tgsis.delete_chunk_slice('d4dtrgl', p_geoid, ARRAY[p_timem]);
+    ELSE
+        DELETE FROM tgsis.d4dtrgl WHERE geoid = p_geoid AND timem = p_timem;
+    END IF;
     DELETE FROM tgsis.node WHERE geoid = p_geoid AND timem = p_timem;
     DELETE FROM tgsis.timet WHERE geoid = p_geoid AND timem = p_timem;
     DELETE FROM tgsis.timem WHERE geoid = p_geoid AND timem = p_timem;

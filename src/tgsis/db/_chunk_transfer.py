@@ -62,6 +62,7 @@ __all__ = [
     "instant_rows",
     "repeated_corners",
     "upload_instants",
+    "write_instants",
     "INSTANT_BLOCK_BITS",
 ]
 
@@ -922,3 +923,53 @@ def upload_instants(
     if layout.versioned and revision != 0:
         conn.execute("SELECT tgsis.record_changed_objects('tgsis', %s, %s::text[])", (table, objects))
     return True
+
+
+def write_instants(
+    conn: Conn,
+    table: str,
+    geoid: int,
+    instants: Sequence[InstantKey],
+    counts: Sequence[int],
+    columns: Mapping[str, npt.NDArray[Any]],
+    storage: Storage,
+    first_ids: Sequence[int] | None = None,
+    *,
+    keys: Sequence[str],
+    idcolumn: str,
+) -> None:
+    """Write new instants' rows of a time table (models 2 and 3): chunks encoded here, else rows.
+
+    The rows are :func:`upload_instants`' (instant ``instants[i]``, whose key columns are ``keys``, has
+    ``counts[i]`` consecutive rows of ``columns`` with ``idcolumn`` ``first_ids[i] ..``, default from 0). A
+    table stored in chunks takes them by :func:`upload_instants` (one binary COPY of chunks) unless it
+    declines (chunks of one of these instants there already); then, and for a table stored as rows, they
+    go through :meth:`Storage.copy` (a COPY of rows, or ``tgsis.insert_chunk_rows``). Columns of floats
+    travel as ``float8``, the others as ``int8``.
+
+    Raises
+    ------
+    InvalidInputError, InvalidGeometryError, NotVersionedError, ReadOnlyRevisionError
+        As :func:`upload_instants` and :meth:`Storage.copy` (nothing is written).
+    """
+    if ("tgsis", table) in storage.chunked and upload_instants(
+        conn, table, geoid, instants, counts, columns, storage, first_ids
+    ):
+        return
+    firsts = list(first_ids) if first_ids is not None else [0] * len(counts)
+    total = int(sum(counts))
+    ids = [np.arange(c, dtype=np.int64) + f for c, f in zip(counts, firsts, strict=True)]
+    storage.copy(
+        conn,
+        "tgsis",
+        table,
+        [
+            ("geoid", np.full(total, geoid, dtype=np.int64), "int8"),
+            *(
+                (name, np.repeat(np.asarray([k[i] for k in instants], dtype=np.float64), counts), "float8")
+                for i, name in enumerate(keys)
+            ),
+            (idcolumn, np.concatenate(ids) if ids else np.zeros(0, dtype=np.int64), "int8"),
+            *((name, values, "float8" if values.dtype.kind == "f" else "int8") for name, values in columns.items()),
+        ],
+    )

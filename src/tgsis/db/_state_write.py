@@ -30,7 +30,7 @@ from tgsis.db._chunk_write import stored_in_chunks, swap_object_rows, write_obje
 from tgsis.db._cube import box_corners, cube_name
 from tgsis.db._property_chunks import write_property_rows
 from tgsis.db._static import SIMPLEX, copy_extra_rows, part_rows
-from tgsis.db._transfer import Storage
+from tgsis.db._transfer import Storage, delete_chunk_rows
 from tgsis.db.classes import FeatureClass, stores_part_column
 from tgsis.db.copy import SQL_TYPES, array_wire
 from tgsis.errors import InvalidInputError
@@ -820,21 +820,13 @@ def _write_table_difference(
     deleted = 0
     if len(gone):
         at = np.flatnonzero(np.isin(old_codes, gone))
-        names = [k for k, _, _ in old.keys]
-        arrays = [np.asarray(v)[at].tolist() for _, _, v in old.keys]
-        wires = [w for _, w, _ in old.keys]
-        deleted = max(
-            conn.execute(
-                sql.SQL("DELETE FROM {} WHERE {} = %s AND ({}) IN (SELECT * FROM unnest({}))").format(
-                    sql.Identifier(old.schema, old.table),
-                    sql.Identifier(old.objectkey),
-                    sql.SQL(", ").join(sql.Identifier(n) for n in names),
-                    sql.SQL(", ").join(sql.SQL("%s::{}[]").format(sql.SQL(w)) for w in wires),  # wires: ours, fixed
-                ),
-                (geoid, *arrays),
-            ).rowcount,
-            0,
-        )
+        if (old.schema, old.table) in storage.chunked:  # one set-based call, not a chunk rewrite per row
+            storage.check(old.schema, old.table)
+            keys = [(old.objectkey, np.full(len(at), geoid, dtype=np.int64), "int8")]
+            keys += [(k, np.asarray(v)[at], w) for k, w, v in old.keys]
+            deleted = delete_chunk_rows(conn, old.table, keys)
+        else:
+            deleted = _delete_keys(conn, old, geoid, at)
     if new.objectkey == "_geoid":  # a property row whose values are all NaN had none where it comes from: none
         fresh = fresh[~_without_row([np.asarray(v) for _, _, v in new.values], fresh)]
     if not len(fresh):
@@ -858,6 +850,25 @@ def _write_table_difference(
         columns.append((name, chosen, wire))
     storage.copy(conn, new.schema, new.table, columns)
     return deleted, len(fresh)
+
+
+def _delete_keys(conn: Conn, rows: _TableRows, geoid: int, at: npt.NDArray[np.intp]) -> int:
+    """Delete the rows ``at`` of ``rows`` (by key) through the table's view; rows deleted."""
+    names = [k for k, _, _ in rows.keys]
+    arrays = [np.asarray(v)[at].tolist() for _, _, v in rows.keys]
+    wires = [w for _, w, _ in rows.keys]
+    return max(
+        conn.execute(
+            sql.SQL("DELETE FROM {} WHERE {} = %s AND ({}) IN (SELECT * FROM unnest({}))").format(
+                sql.Identifier(rows.schema, rows.table),
+                sql.Identifier(rows.objectkey),
+                sql.SQL(", ").join(sql.Identifier(n) for n in names),
+                sql.SQL(", ").join(sql.SQL("%s::{}[]").format(sql.SQL(w)) for w in wires),  # wires: ours, fixed
+            ),
+            (geoid, *arrays),
+        ).rowcount,
+        0,
+    )
 
 
 def _write_instant_rows(

@@ -440,18 +440,37 @@ def insert_chunk_rows(conn: Conn, table: str, columns: Sequence[tuple[str, npt.A
     InvalidInputError
         A column of another wire type (nothing is sent).
     """
+    return _chunk_rows_call(conn, "insert_chunk_rows", table, columns)
+
+
+def delete_chunk_rows(conn: Conn, table: str, keys: Sequence[tuple[str, npt.ArrayLike, str]]) -> int:
+    """Delete rows of the model table ``tgsis.<table>`` stored in chunks by key: one call of ``tgsis.delete_chunk_rows``.
+
+    ``keys``: ``(name, values (n,), wire type)``, every column of the row table's key once (``int8`` or
+    ``float8``, the doubles sent bit for bit); keys not there are skipped. Returns the rows deleted.
+
+    Raises
+    ------
+    InvalidInputError
+        A column of another wire type (nothing is sent).
+    """
+    return _chunk_rows_call(conn, "delete_chunk_rows", table, keys)
+
+
+def _chunk_rows_call(conn: Conn, function: str, table: str, columns: Sequence[tuple[str, npt.ArrayLike, str]]) -> int:
+    """``tgsis.<function>(table, names, ints, floats)``: the bigint columns then the double ones, as (columns x rows)."""
     ints = [(n, np.asarray(v, dtype=np.int64)) for n, v, w in columns if w == "int8"]
     floats = [(n, np.asarray(v, dtype=np.float64)) for n, v, w in columns if w == "float8"]
     if len(ints) + len(floats) != len(columns):
         raise InvalidInputError(
-            f"tgsis.{table}: rows stored in chunks are inserted as bigint and double precision columns only",
+            f"tgsis.{table}: rows stored in chunks are written as bigint and double precision columns only",
             detail=f"columns {[(n, w) for n, _, w in columns]}",
         )
     count = len(ints[0][1]) if ints else 0
     int_rows = np.stack([v for _, v in ints]) if ints else np.empty((0, count), dtype=np.int64)
     float_rows = np.stack([v for _, v in floats]) if floats else None
     row = conn.execute(
-        "SELECT tgsis.insert_chunk_rows(%s, %s::text[], %b::bigint[], %b::float8[])",
+        sql.SQL("SELECT tgsis.{}(%s, %s::text[], %b::bigint[], %b::float8[])").format(sql.Identifier(function)),
         (
             table,
             [n for n, _ in (*ints, *floats)],

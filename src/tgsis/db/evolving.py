@@ -26,7 +26,7 @@ from psycopg import sql
 from tgsis import datamodels
 from tgsis._series import check_time
 from tgsis.arguments import checked
-from tgsis.db._chunk_transfer import upload_instants
+from tgsis.db._chunk_transfer import write_instants
 from tgsis.db._continuity import check_continuity, checked_tolerance
 from tgsis.db._temporal_common import (
     Conn,
@@ -137,28 +137,25 @@ def _copy_periods(
     triangle_columns = {f"nodeid{j + 1}": triangles[:, j] for j in range(3)}
     # a table stored in chunks takes the periods' chunks encoded here (one COPY), unless it holds chunks of these
     # instants already (a period deleted and appended again in one revision: tgsis.insert_chunk_rows then)
-    if ("tgsis", "d4dtrgl") not in storage.chunked or not upload_instants(
-        conn, "d4dtrgl", geoid, [(s,) for s in starts], m, triangle_columns, storage, triangle_offsets.tolist()
-    ):
-        storage.copy(
-            conn,
-            "tgsis",
-            "d4dtrgl",
-            [
-                ("geoid", full(sum(m)), "int8"),
-                ("timem", np.repeat(starts, m).astype(np.float64), "float8"),
-                ("trglid", first_triangle + np.arange(sum(m), dtype=np.int64), "int8"),
-                *((name, values, "int8") for name, values in triangle_columns.items()),
-            ],
-        )
+    write_instants(
+        conn,
+        "d4dtrgl",
+        geoid,
+        [(s,) for s in starts],
+        m,
+        triangle_columns,
+        storage,
+        triangle_offsets.tolist(),
+        keys=["timem"],
+        idcolumn="trglid",
+    )
     # per period and geometry instant, every node: g_i * n_i rows
-    samples = [gi * ni for gi, ni in zip(g, n)]
     xyz = concat([p.positions.reshape(-1, 3) for p in periods])
     vertex_columns = {"x": xyz[:, 0], "y": xyz[:, 1], "z": xyz[:, 2]}
     # chunked: one object per geometry instant (timem, timet), its nodes' ids the period's run, so a node keeps
     # its chunk and slot at every instant of its period (the snapshot interpolates on aligned arrays)
     instants = [(p.start, float(t)) for p in periods for t in p.times.tolist()]
-    if ("tgsis", "d4dvrtx") not in storage.chunked or not upload_instants(
+    write_instants(
         conn,
         "d4dvrtx",
         geoid,
@@ -167,28 +164,9 @@ def _copy_periods(
         vertex_columns,
         storage,
         [off for p, off in zip(periods, node_offsets.tolist()) for _ in p.times],
-    ):
-        storage.copy(
-            conn,
-            "tgsis",
-            "d4dvrtx",
-            [
-                ("geoid", full(sum(samples)), "int8"),
-                ("timem", np.repeat(starts, samples).astype(np.float64), "float8"),
-                ("timet", concat([np.repeat(p.times, p.n_nodes) for p in periods]), "float8"),
-                (
-                    "nodeid",
-                    concat(
-                        [
-                            np.tile(np.arange(p.n_nodes, dtype=np.int64) + off, len(p.times))
-                            for p, off in zip(periods, node_offsets.tolist())
-                        ]
-                    ),
-                    "int8",
-                ),
-                *((name, values, "float8") for name, values in vertex_columns.items()),
-            ],
-        )
+        keys=["timem", "timet"],
+        idcolumn="nodeid",
+    )
     if fc.cell_properties:
         per = n if fc.alignment == "VERTEX" else m
         offsets = node_offsets if fc.alignment == "VERTEX" else triangle_offsets

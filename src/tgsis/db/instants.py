@@ -30,7 +30,7 @@ from tgsis.db._chunk_transfer import (
     chunked_tables,
     instant_layout,
     instant_rows,
-    upload_instants,
+    write_instants,
 )
 from tgsis.db._cube import cube_name
 from tgsis.db._temporal_common import (
@@ -97,44 +97,15 @@ def _copy_instants(
     ]
     n = [s.n_vertices for s in surfaces]
     m = [s.n_cells for s in surfaces]
-    vertex_ids, triangle_ids = _local_ids(n), _local_ids(m)
-    geoids_v = np.full(sum(n), geoid, dtype=np.int64)
-    geoids_t = np.full(sum(m), geoid, dtype=np.int64)
     xyz = concat([s.vertices for s in surfaces])
     tri = concat([s.cells for s in surfaces])
     vertex_columns = {"x": xyz[:, 0], "y": xyz[:, 1], "z": xyz[:, 2]}
     # a time table stored in chunks takes the instants' chunks encoded here (one COPY), unless it holds chunks of
     # these instants already (a delete and add again in one revision: tgsis.insert_chunk_rows then)
     instants = [(t,) for t in times]
-    if ("tgsis", "times_vrtx") not in storage.chunked or not upload_instants(
-        conn, "times_vrtx", geoid, instants, n, vertex_columns, storage
-    ):
-        storage.copy(
-            conn,
-            "tgsis",
-            "times_vrtx",
-            [
-                ("geoid", geoids_v, "int8"),
-                ("times", np.repeat(np.asarray(times, dtype=np.float64), n), "float8"),
-                ("vrtxid", vertex_ids, "int8"),
-                *((name, values, "float8") for name, values in vertex_columns.items()),
-            ],
-        )
+    write_instants(conn, "times_vrtx", geoid, instants, n, vertex_columns, storage, keys=["times"], idcolumn="vrtxid")
     triangle_columns = {f"vrtxid{j + 1}": tri[:, j] for j in range(3)}
-    if ("tgsis", "times_trgl") not in storage.chunked or not upload_instants(
-        conn, "times_trgl", geoid, instants, m, triangle_columns, storage
-    ):
-        storage.copy(
-            conn,
-            "tgsis",
-            "times_trgl",
-            [
-                ("geoid", geoids_t, "int8"),
-                ("times", np.repeat(np.asarray(times, dtype=np.float64), m), "float8"),
-                ("trglid", triangle_ids, "int8"),
-                *((name, values, "int8") for name, values in triangle_columns.items()),
-            ],
-        )
+    write_instants(conn, "times_trgl", geoid, instants, m, triangle_columns, storage, keys=["times"], idcolumn="trglid")
     if fc.cell_properties:
         counts = n if fc.alignment == "VERTEX" else m
         idx = _local_ids(counts)
