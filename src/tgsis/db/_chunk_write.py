@@ -21,7 +21,7 @@ import psycopg
 from psycopg import sql
 
 from tgsis._chunks import CHUNK_BITS, CHUNK_SIZE, ChunkSet, encode, from_copy, to_copy
-from tgsis.db._chunk_transfer import ChunkTable, chunk_table, split_first_field
+from tgsis.db._chunk_transfer import ChunkTable, chunk_table, split_first_field, visible_chunks
 from tgsis.errors import InvalidInputError
 
 __all__ = [
@@ -243,14 +243,7 @@ def read_chunks(conn: Conn, layout: ChunkTable, geoid: int, touched: IntArray) -
     One binary COPY: the places ``tgsis.swap_object_chunks`` checks are those of the content returned.
     """
     spec = layout.columns
-    visible = (
-        sql.SQL(
-            "(c.revision = ANY ((SELECT tgsis.get_revisions(true))::integer[])) IS TRUE "
-            "AND (NOT c.revclosed OR NOT (c.lastrevs && (SELECT tgsis.get_revisions(true))))"
-        )
-        if layout.versioned
-        else sql.SQL("true")
-    )
+    visible = visible_chunks(layout)  # the session's set, and the old-snapshot guard (40001)
     query = sql.SQL(
         "COPY (SELECT c.tableoid::text || ':' || c.ctid::text || ':' || c.xmin::text, {} FROM {} c "
         "WHERE c.{} = {} AND c.chunk = ANY ({}::bigint[]) AND {}) TO STDOUT (FORMAT binary)"
