@@ -322,3 +322,19 @@ def test_roles_constraints_and_a_tampered_stage(conn: Conn, db_dsn: str, monkeyp
             )
         ed.rollback()
     assert _digest(conn, b) == before
+
+
+def test_repeatable_read_takes_the_server_path(conn: Conn) -> None:
+    """Under REPEATABLE READ the client's path does not apply (None, no chunk read): the server's path writes."""
+    a, _ = _objects(conn, False)
+    conn.isolation_level = psycopg.IsolationLevel.REPEATABLE_READ
+    try:
+        columns = _columns(a, [40], np.random.default_rng(4))
+        assert _property_chunks.swap_property_rows(conn, "public", "rock_cellpros", a, [40], columns) is None
+        assert _property_chunks.write_property_rows(conn, "public", "rock_cellpros", a, [40], columns) == 1
+        conn.commit()
+    finally:
+        conn.isolation_level = None
+    got = conn.execute("SELECT facies FROM public.rock_cellpros WHERE _geoid = %s AND _idx = 40", (a,)).fetchone()
+    assert got == (int(columns[4][1][0]),)
+    conn.commit()

@@ -404,9 +404,10 @@ def swap_property_rows(
         or not bool((np.asarray(keys) == geoid).all())
     ):
         return None  # (the server path refuses such rows by name)
+    # (READ COMMITTED asked first, as open_stage asks it: no chunk read at all where the path does not apply)
     checks = conn.execute(
         "SELECT EXISTS (SELECT FROM pg_constraint con WHERE con.conrelid = to_regclass(%s) AND con.contype = 'c' "
-        "AND con.conname <> %s)",
+        "AND con.conname <> %s) OR current_setting('transaction_isolation') <> 'read committed'",
         (sql.Identifier(schema, f"{table}_shape").as_string(conn), f"{table}_shape_holds_no_rows"),
     ).fetchone()
     if checks is None or checks[0]:
