@@ -20,7 +20,10 @@ difference (``save_feature`` in version e1 of a versioned class) of a 1 % proper
 scattered, every chunk touched) and of a 100 % one, for classes ``bare`` (no property: the mesh's own
 check-in), ``onrows`` and ``inchunks`` (switched after the upload), the property's share less ``bare``'s;
 ``--shares 1pctlocal`` the first 1 % of the ids (a region in the spatial order);
-with ``--face`` also the path before (the face's rows, ``tgsis.db.checkin.write_property_rows`` off) against
+``inchunksserver`` is a fourth class in chunks whose edit is aggregated by the server
+(``tgsis.write_property_rows``, the client's swap switched off: the path of the thirteenth session), against
+``inchunks`` (the client encodes the touched chunks, ``tgsis.swap_object_chunks``);
+with ``--face`` also the path before (the face's rows, ``tgsis.db._state_write.write_property_rows`` off) against
 the bulk one on a surface of ``--face-side``. Prints ``name: value`` lines.
 
     .venv/bin/python bench/property_chunks.py [--side 1000] [--order spatial|file] [--versioned] [--repeat 3] [--face] [--alter]
@@ -40,8 +43,9 @@ from timing import bench_database
 from transfer import grid_surface
 
 import tgsis
+import tgsis.db._property_chunks as property_chunks
+import tgsis.db._state_write as state_write
 import tgsis.db._static as static
-import tgsis.db.checkin as checkin
 from tgsis.db import features as F
 from tgsis.db._transfer import Packed, columns_out_all
 from tgsis.db.versions import storage_table
@@ -163,7 +167,18 @@ def checkins(
     tgsis.create_version(conn, f"{prefix}e1")
     conn.commit()
     times: dict[str, list[float]] = {}
-    saved = checkin.write_property_rows
+    saved, swapped, edit = state_write.write_property_rows, property_chunks._swapped, state_write.write_property_edit
+    spent = [0.0]
+
+    def timed_edit(*args: Any) -> Any:
+        """The property table's write alone (write_property_edit), timed: less noisy than the check-in's share."""
+        start = time.perf_counter()
+        try:
+            return edit(*args)
+        finally:
+            spent[0] += time.perf_counter() - start
+
+    state_write.write_property_edit = timed_edit  # type: ignore[assignment]
     try:
         with tgsis.in_version(conn, f"{prefix}e1"):
             for _ in range(repeat):
@@ -183,14 +198,19 @@ def checkins(
                             props_now["porosity"] = porosity
                         edited = tgsis.Surface(stored.vertices, stored.cells, vertex_properties=props_now)
                         if name.endswith("face"):  # the path before: the face's rows, its trigger row by row
-                            checkin.write_property_rows = lambda *a: None  # type: ignore[assignment]
+                            state_write.write_property_rows = lambda *a: None  # type: ignore[assignment]
+                        if name.endswith("server"):  # the server's aggregation (tgsis.write_property_rows), no swap
+                            property_chunks._swapped = lambda *a: None  # type: ignore[assignment]
                         conn.execute("SELECT 1")  # one transaction, rolled back: each run from the same state
+                        spent[0] = 0.0
                         taken = seconds(lambda n=name, e=edited: tgsis.save_feature(conn, f"{prefix}{n}", geoids[n], e))
-                        checkin.write_property_rows = saved
+                        state_write.write_property_rows, property_chunks._swapped = saved, swapped
                         conn.rollback()
                         times.setdefault(f"{name}_{share}", []).append(taken)
+                        times.setdefault(f"{name}_{share}_write", []).append(spent[0])
     finally:
-        checkin.write_property_rows = saved
+        state_write.write_property_rows, property_chunks._swapped = saved, swapped
+        state_write.write_property_edit = edit  # type: ignore[assignment]
     return {k: statistics.median(v) for k, v in times.items()}
 
 
@@ -207,6 +227,14 @@ def report_checkins(
         prop = {n: t[f"{n}_{share}"] - base for n in names if n != "bare"}
         for name, value in prop.items():
             print(f"{prefix}checkin_{share}_property_{name}_s: {value:.3f}")
+        write = {n: t[f"{n}_{share}_write"] for n in names if n != "bare"}
+        for name, value in write.items():  # the property table's write alone (write_property_edit)
+            print(f"{prefix}checkin_{share}_property_write_{name}_s: {value:.3f}")
+        for name in write:
+            if name != "inchunks" and write[name] > 0:
+                print(
+                    f"{prefix}checkin_{share}_property_write_inchunks_to_{name}: {write['inchunks'] / write[name]:.3f}"
+                )
         for name in prop:
             if name != "inchunks" and prop[name] > 0:
                 print(f"{prefix}checkin_{share}_property_inchunks_to_{name}: {prop['inchunks'] / prop[name]:.3f}")
@@ -235,7 +263,7 @@ def main() -> None:
     with bench_database() as conn:
         conn.autocommit = False
         if args.checkin:
-            names, shares = ("bare", "onrows", "inchunks"), tuple(args.shares.split(","))
+            names, shares = ("bare", "onrows", "inchunks", "inchunksserver"), tuple(args.shares.split(","))
             report_checkins(checkins(conn, surface, args.repeat, names, "", shares), names, "", n, shares)
             if args.face:
                 small = grid_surface(args.face_side)

@@ -55,6 +55,7 @@ __all__ = [
     "download_chunks",
     "download_tables",
     "chunk_copy_query",
+    "visible_chunks",
     "split_copy",
     "split_first_field",
     "instant_layout",
@@ -285,7 +286,7 @@ def upload_chunks(conn: Conn, table: str, objects: Sequence[ObjectRows], storage
     return sum(len(c.chunk) for c in encoded)
 
 
-def _visible(layout: ChunkTable, revisions: Sequence[int] | None = None) -> sql.Composable:
+def visible_chunks(layout: ChunkTable, revisions: Sequence[int] | None = None) -> sql.Composable:
     """The session's visibility test of chunk versions (today's versioned views'; none when unversioned), guarded.
 
     The guard: ``tgsis.chunk_snapshot_guard`` once per statement, 40001 when the statement's snapshot predates
@@ -316,17 +317,17 @@ def chunk_copy_query(layout: ChunkTable, geoids: Sequence[int], revisions: Seque
 
     For one object the stream is :func:`from_copy`'s as it is; for several, each row starts with
     ``geoid`` (rows in no order), which :func:`split_copy` takes off. ``revisions``: the set of
-    :func:`_visible` (default: the session's).
+    :func:`visible_chunks` (default: the session's).
     """
     columns = sql.SQL(", ").join(sql.SQL("c.{}").format(sql.Identifier(c)) for c in layout.columns.select_columns())
     key = sql.Identifier(layout.columns.key)
     if len(geoids) == 1:
         select = sql.SQL("SELECT {} FROM {} c WHERE c.{} = {} AND {}").format(
-            columns, layout.relation, key, sql.Literal(int(geoids[0])), _visible(layout, revisions)
+            columns, layout.relation, key, sql.Literal(int(geoids[0])), visible_chunks(layout, revisions)
         )
     else:
         select = sql.SQL("SELECT c.{}, {} FROM {} c WHERE c.{} = ANY ({}::bigint[]) AND {}").format(
-            key, columns, layout.relation, key, sql.Literal([int(g) for g in geoids]), _visible(layout, revisions)
+            key, columns, layout.relation, key, sql.Literal([int(g) for g in geoids]), visible_chunks(layout, revisions)
         )
     return sql.SQL("COPY ({}) TO STDOUT (FORMAT binary)").format(select)
 
@@ -582,7 +583,7 @@ class PackedChunks:
         record = sql.SQL("record_send(ROW({}))").format(
             sql.SQL(", ").join(sql.SQL("c.{}").format(sql.Identifier(c)) for c in self.layout.columns.select_columns())
         )
-        visible = _visible(self.layout)
+        visible = visible_chunks(self.layout)
         if len(self.geoids) == 1:
             return sql.SQL(
                 "SELECT {part}::int4, {geoid}::int8, count(*), string_agg({record}, ''::bytea) FROM {source} c "
@@ -726,7 +727,7 @@ def instant_rows(
     """The rows of a time table (models 2 and 3) of objects ``geoids`` at their instants, from the chunks the session sees.
 
     One query: per object and instant the server joins the visible chunk versions' ``record_send`` values
-    (the versioned views' test, :func:`_visible`; every chunk of unversioned storage) into one ``bytea``,
+    (the versioned views' test, :func:`visible_chunks`; every chunk of unversioned storage) into one ``bytea``,
     decoded here (:func:`records_as_copy`, :func:`~tgsis._chunks.from_copy`), as model 1's download
     (:class:`PackedChunks`). Read with the role's rights (grants, row-level security). The instants come
     in binary (their bits); no value travels as text.
@@ -770,7 +771,7 @@ def instant_rows(
         record=record,
         source=layout.relation,
         at=at,
-        visible=_visible(layout),
+        visible=visible_chunks(layout),
         bits=sql.Literal(INSTANT_BLOCK_BITS),
     )
     with conn.cursor(binary=True) as cursor:

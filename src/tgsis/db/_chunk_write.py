@@ -20,11 +20,20 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
-from tgsis._chunks import CHUNK_BITS, CHUNK_SIZE, encode, from_copy, to_copy
-from tgsis.db._chunk_transfer import chunk_table, split_first_field
+from tgsis._chunks import CHUNK_BITS, CHUNK_SIZE, ChunkSet, encode, from_copy, to_copy
+from tgsis.db._chunk_transfer import ChunkTable, chunk_table, split_first_field, visible_chunks
 from tgsis.errors import InvalidInputError
 
-__all__ = ["last_id", "next_id", "stored_in_chunks", "swap_object_rows", "write_object_rows"]
+__all__ = [
+    "last_id",
+    "next_id",
+    "open_stage",
+    "read_chunks",
+    "stored_in_chunks",
+    "swap_chunks",
+    "swap_object_rows",
+    "write_object_rows",
+]
 
 Conn = psycopg.Connection[Any]
 IntArray = npt.NDArray[np.int64]
@@ -171,51 +180,12 @@ def swap_object_rows(
     if not len(gone) and not len(written):
         return 0
     layout = chunk_table(conn, table)
-    row = conn.execute(
-        sql.SQL(
-            "SELECT CASE WHEN {ok} THEN tgsis.object_chunks_stage(%s) END FROM (SELECT "
-            "has_table_privilege({face}::regclass, 'INSERT') AND has_table_privilege({face}::regclass, 'DELETE') "
-            "AND has_table_privilege({chunk}::regclass, 'SELECT') "
-            "AND current_setting('transaction_isolation') = 'read committed' AS ok) p"
-        ).format(
-            ok=sql.SQL("p.ok"),
-            face=sql.Literal(sql.Identifier("tgsis", table).as_string(conn)),
-            chunk=sql.Literal(layout.relation.as_string(conn)),
-        ),
-        (table,),
-    ).fetchone()
-    if row is None or row[0] is None:
+    stage = open_stage(conn, table, sql.Identifier("tgsis", table), layout)
+    if stage is None:
         return None
-    stage = str(row[0])
     spec = layout.columns
     touched = np.unique(np.concatenate([gone, written]) >> CHUNK_BITS)
-    visible = (
-        sql.SQL(
-            "(c.revision = ANY ((SELECT tgsis.get_revisions(true))::integer[])) IS TRUE "
-            "AND (NOT c.revclosed OR NOT (c.lastrevs && (SELECT tgsis.get_revisions(true))))"
-        )
-        if layout.versioned
-        else sql.SQL("true")
-    )
-    # the chunks and their places in ONE statement: the places the server checks are those of the content merged
-    query = sql.SQL(
-        "COPY (SELECT c.tableoid::text || ':' || c.ctid::text || ':' || c.xmin::text, {} FROM {} c "
-        "WHERE c.geoid = {} AND c.chunk = ANY ({}::bigint[]) AND {}) TO STDOUT (FORMAT binary)"
-    ).format(
-        sql.SQL(", ").join(sql.SQL("c.{}").format(sql.Identifier(c)) for c in spec.select_columns()),
-        layout.relation,
-        sql.Literal(int(geoid)),
-        sql.Literal(touched.tolist()),
-        visible,
-    )
-    with conn.cursor().copy(query) as copy:
-        payload = b"".join(bytes(block) for block in copy)
-    places, stream = split_first_field(payload)
-    old = from_copy(stream, spec)  # chunks ascending
-    bases: list[str | None] = [None] * len(touched)
-    raw_chunks = _row_chunks(stream)
-    for place, chunk in zip(places, raw_chunks, strict=True):
-        bases[int(np.searchsorted(touched, chunk))] = None if place is None else place.decode()
+    old, bases = read_chunks(conn, layout, geoid, touched)
     old_ids, old_columns = old.rows()
     keep = ~np.isin(old_ids, np.concatenate([gone, written]))
     new_ids = np.concatenate([old_ids[keep], written])
@@ -242,8 +212,68 @@ def swap_object_rows(
         else:
             edit = edit_column(floats, np.float64, float_names, name)
             columns[name] = np.concatenate([old_columns[name][keep].astype(np.float64), edit])
-    chunks = encode(new_ids, columns, spec)
-    names = spec.copy_columns()
+    return swap_chunks(conn, table, stage, geoid, touched, bases, encode(new_ids, columns, spec))
+
+
+def open_stage(conn: Conn, name: str, face: sql.Composable, layout: ChunkTable) -> str | None:
+    """The transaction's stage of ``tgsis.object_chunks_stage(name)`` if the client's swap is open to the role, else None.
+
+    Open: the role may INSERT into and DELETE from the face ``face``, SELECT from the chunk table, and the
+    transaction is READ COMMITTED (one statement, nothing made otherwise).
+    """
+    row = conn.execute(
+        sql.SQL(
+            "SELECT CASE WHEN {ok} THEN tgsis.object_chunks_stage(%s) END FROM (SELECT "
+            "has_table_privilege({face}::regclass, 'INSERT') AND has_table_privilege({face}::regclass, 'DELETE') "
+            "AND has_table_privilege({chunk}::regclass, 'SELECT') "
+            "AND current_setting('transaction_isolation') = 'read committed' AS ok) p"
+        ).format(
+            ok=sql.SQL("p.ok"),
+            face=sql.Literal(face.as_string(conn)),
+            chunk=sql.Literal(layout.relation.as_string(conn)),
+        ),
+        (name,),
+    ).fetchone()
+    return None if row is None or row[0] is None else str(row[0])
+
+
+def read_chunks(conn: Conn, layout: ChunkTable, geoid: int, touched: IntArray) -> tuple[ChunkSet, list[str | None]]:
+    """The visible versions of chunks ``touched`` (c,) of object ``geoid`` and each one's place (None: no version).
+
+    One binary COPY: the places ``tgsis.swap_object_chunks`` checks are those of the content returned.
+    """
+    spec = layout.columns
+    visible = visible_chunks(layout)  # the session's set, and the old-snapshot guard (40001)
+    query = sql.SQL(
+        "COPY (SELECT c.tableoid::text || ':' || c.ctid::text || ':' || c.xmin::text, {} FROM {} c "
+        "WHERE c.{} = {} AND c.chunk = ANY ({}::bigint[]) AND {}) TO STDOUT (FORMAT binary)"
+    ).format(
+        sql.SQL(", ").join(sql.SQL("c.{}").format(sql.Identifier(c)) for c in spec.select_columns()),
+        layout.relation,
+        sql.Identifier(spec.key),
+        sql.Literal(int(geoid)),
+        sql.Literal(touched.tolist()),
+        visible,
+    )
+    with conn.cursor().copy(query) as copy:
+        payload = b"".join(bytes(block) for block in copy)
+    places, stream = split_first_field(payload)
+    old = from_copy(stream, spec)  # chunks ascending
+    bases: list[str | None] = [None] * len(touched)
+    for place, chunk in zip(places, _row_chunks(stream), strict=True):
+        bases[int(np.searchsorted(touched, chunk))] = None if place is None else place.decode()
+    return old, bases
+
+
+def swap_chunks(
+    conn: Conn, name: str, stage: str, geoid: int, touched: IntArray, bases: list[str | None], chunks: ChunkSet
+) -> int:
+    """COPY the encoded ``chunks`` into ``stage`` and swap them in (``tgsis.swap_object_chunks(name, ...)``).
+
+    ``touched`` (c,): the chunks the edit touches, with ``bases`` their places read by :func:`read_chunks`;
+    one of them absent from ``chunks`` is left without rows. Returns the chunks written.
+    """
+    names = chunks.columns.copy_columns()
     statement = sql.SQL("COPY {} ({}) FROM STDIN (FORMAT binary)").format(
         sql.SQL(stage), sql.SQL(", ").join(map(sql.Identifier, names))
     )
@@ -251,7 +281,7 @@ def swap_object_rows(
         copy.write(to_copy(chunks, int(geoid)))
     result = conn.execute(
         "SELECT tgsis.swap_object_chunks(%s, %s, %s::bigint[], %s::text[])",
-        (table, int(geoid), touched.tolist(), bases),
+        (name, int(geoid), touched.tolist(), bases),
     ).fetchone()
     return int(result[0]) if result and result[0] is not None else 0
 

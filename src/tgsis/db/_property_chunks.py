@@ -44,14 +44,22 @@ import numpy.typing as npt
 import psycopg
 from psycopg import sql
 
-from tgsis._chunks import CHUNK_SIZE, ChunkColumns, encode, to_copy
+from tgsis._chunks import CHUNK_BITS, CHUNK_SIZE, ChunkColumns, encode, to_copy
 from tgsis.db._chunk_transfer import ChunkTable, ObjectRows, PackedChunks
+from tgsis.db._chunk_write import open_stage, read_chunks, swap_chunks
 from tgsis.db._transfer import copy_in
 from tgsis.db.classes import FeatureClass
 from tgsis.db.copy import encode_rows
 from tgsis.errors import InvalidInputError
 
-__all__ = ["PropertyChunks", "property_chunks", "property_request", "upload_properties", "write_property_rows"]
+__all__ = [
+    "PropertyChunks",
+    "property_chunks",
+    "property_request",
+    "swap_property_rows",
+    "upload_properties",
+    "write_property_rows",
+]
 
 Conn = psycopg.Connection[Any]
 
@@ -94,6 +102,11 @@ def property_chunks(conn: Conn, fc: FeatureClass, table: str) -> PropertyChunks 
     the chunk versions the session sees, as the face; an upload goes by :func:`write_property_rows`, not
     :func:`upload_properties`). Read from the catalog.
     """
+    return _property_layout(conn, fc.schema, table)
+
+
+def _property_layout(conn: Conn, schema: str, table: str) -> PropertyChunks | None:
+    """:func:`property_chunks` of the property table ``schema.table``."""
     row = conn.execute(
         "SELECT c.oid, f.relkind::text, has_table_privilege(c.oid, 'SELECT'), "
         "has_table_privilege(f.oid, 'INSERT') AND has_database_privilege(current_database(), 'TEMP'), "
@@ -101,7 +114,7 @@ def property_chunks(conn: Conn, fc: FeatureClass, table: str) -> PropertyChunks 
         "format('%%I.%%I', %s::text, %s::text) "
         "FROM pg_class c JOIN pg_namespace n ON n.oid = c.relnamespace, pg_class f "
         "WHERE n.nspname = %s AND c.relname = %s AND f.oid = to_regclass(format('%%I.%%I', %s::text, %s::text))",
-        (fc.schema, table, fc.schema, table, fc.schema, f"{table}_chunk", fc.schema, table),
+        (schema, table, schema, table, schema, f"{table}_chunk", schema, table),
     ).fetchone()
     if row is None or row[1] != "v":
         return None
@@ -123,7 +136,7 @@ def property_chunks(conn: Conn, fc: FeatureClass, table: str) -> PropertyChunks 
     kinds = tuple((n, _KINDS[t]) for n, t in arrays)
     columns = ChunkColumns(tuple(n for n, _ in arrays), properties=kinds, key="_geoid")
     return PropertyChunks(
-        table, columns, bool(versioned), bool(readable), fc.schema, bool(insertable), str(name), int(oid)
+        table, columns, bool(versioned), bool(readable), schema, bool(insertable), str(name), int(oid)
     )
 
 
@@ -282,6 +295,9 @@ def write_property_rows(
     count = len(np.asarray(columns[0][1])) if columns else 0
     if not len(gone) and not count:
         return 0
+    swapped = _swapped(conn, schema, table, geoid, gone, columns if count else [])
+    if swapped is not None:
+        return swapped
     face = sql.Identifier(schema, table)
     stage = sql.Identifier(f"tgsis_property_edit_{hashlib.sha256(f'{schema}.{table}'.encode()).hexdigest()[:16]}")
     # made anew each time: a property added, renamed or dropped in the transaction changes the face's columns
@@ -306,3 +322,116 @@ def write_property_rows(
     ).fetchone()
     conn.execute(sql.SQL("DROP TABLE pg_temp.{}").format(stage))
     return int(written[0]) if written is not None and written[0] is not None else 0
+
+
+def _swapped(
+    conn: Conn,
+    schema: str,
+    table: str,
+    geoid: int,
+    gone: npt.NDArray[np.int64],
+    columns: Sequence[tuple[str, npt.ArrayLike, str]],
+) -> int | None:
+    """:func:`swap_property_rows` in a savepoint; None when it does not apply or lost a race (nothing written then).
+
+    A chunk another transaction wrote between the client's read and the swap (a psql user's write through the
+    face) makes the swap refuse (TG300, nothing written): the edit then goes by ``tgsis.write_property_rows``,
+    which merges it into the chunks as they are now.
+    """
+    try:
+        with conn.transaction():
+            return swap_property_rows(conn, schema, table, geoid, gone, columns)
+    except psycopg.Error as error:
+        if error.sqlstate != "TG300":
+            raise
+        return None
+
+
+def swap_property_rows(
+    conn: Conn,
+    schema: str,
+    table: str,
+    geoid: int,
+    deleted: npt.ArrayLike,
+    columns: Sequence[tuple[str, npt.ArrayLike, str]],
+) -> int | None:
+    """:func:`write_property_rows`, the touched chunks encoded here: read, merged, encoded, staged and swapped in.
+
+    The client's path of a check-in of a class's properties in chunks (``tgsis.write_property_rows``
+    re-aggregates each touched chunk in SQL, about 30 ms a chunk: a scattered edit touches nearly all), as
+    model 1's (:func:`~tgsis.db._chunk_write.swap_object_rows`): the visible versions of the touched chunks
+    read with their places in one binary COPY, the edit merged into their rows (the NULL values of the rows
+    kept kept apart from holes), the chunks encoded (:func:`tgsis._chunks.encode`) and COPied into the
+    transaction's stage (``tgsis.object_chunks_stage``), then ``tgsis.swap_object_chunks`` makes the checks of
+    ``tgsis.write_property_rows`` (INSERT and DELETE on the face, the version's write right or TG305, the
+    object's lock, NOT NULL properties), verifies the encoding and that every chunk's visible version is still
+    the one read (TG300, nothing written) and writes them as ``tgsis.write_chunk_rows`` would, bit for bit.
+
+    Parameters
+    ----------
+    schema, table : str
+        The class's property table (the face of ``tgsis.store_class_in_chunks``).
+    geoid : int
+    deleted : (d,) int
+        Ids whose rows go, or change (then also in ``columns``).
+    columns : sequence of (name, (n,) array, wire type)
+        ``_geoid`` (all ``geoid``), ``_idx`` and properties; a property not given is NULL in the rows written.
+
+    Returns
+    -------
+    int or None
+        Chunks written; None when this path does not apply and nothing was written: the table's layout is not
+        one this client encodes, the role may not read the chunk table or lacks INSERT or DELETE on the face,
+        the transaction is not READ COMMITTED, the row definition has CHECK constraints, or the rows are not
+        the server path's to refuse or accept alone (another object's, an id twice, a present id written
+        without its delete: ``tgsis.write_property_rows`` raises what it raises there).
+    """
+    gone = np.asarray(deleted, dtype=np.int64).reshape(-1)
+    given = {name: np.asarray(values) for name, values, _ in columns}
+    written = np.asarray(given.get("_idx", np.empty(0, dtype=np.int64)), dtype=np.int64).reshape(-1)
+    if not len(gone) and not len(written):
+        return 0
+    layout = _property_layout(conn, schema, table)
+    if layout is None or not layout.readable:
+        return None
+    spec = layout.columns
+    keys = given.get("_geoid", np.full(len(written), geoid, dtype=np.int64))
+    if (
+        set(given) - {"_geoid", "_idx", *spec.names}
+        or any(len(v) != len(written) or v.ndim != 1 for v in given.values())
+        or len(np.unique(written)) != len(written)
+        or bool((written < 0).any())
+        or not bool((np.asarray(keys) == geoid).all())
+    ):
+        return None  # (the server path refuses such rows by name)
+    # (READ COMMITTED asked first, as open_stage asks it: no chunk read at all where the path does not apply)
+    checks = conn.execute(
+        "SELECT EXISTS (SELECT FROM pg_constraint con WHERE con.conrelid = to_regclass(%s) AND con.contype = 'c' "
+        "AND con.conname <> %s) OR current_setting('transaction_isolation') <> 'read committed'",
+        (sql.Identifier(schema, f"{table}_shape").as_string(conn), f"{table}_shape_holds_no_rows"),
+    ).fetchone()
+    if checks is None or checks[0]:
+        return None
+    touched = np.unique(np.concatenate([gone, written]) >> CHUNK_BITS)
+    old, bases = read_chunks(conn, layout, geoid, touched)
+    old_ids, old_columns = old.rows()
+    old_nulls = old.null_rows()
+    if bool(np.isin(np.setdiff1d(written, gone), old_ids).any()):
+        return None  # a present id written without its delete: the face's 23505, raised by the server path
+    stage = open_stage(conn, layout.name, sql.Identifier(schema, table), layout)
+    if stage is None:
+        return None
+    keep = ~np.isin(old_ids, np.concatenate([gone, written]))
+    new_ids = np.concatenate([old_ids[keep], written])
+    values: dict[str, npt.NDArray[Any]] = {}
+    nulls: dict[str, npt.NDArray[np.bool_]] = {}
+    for name in spec.names:
+        dtype = spec.dtype(name)
+        edit = given[name].astype(dtype) if name in given else np.zeros(len(written), dtype=dtype)
+        values[name] = np.concatenate([old_columns[name][keep].astype(dtype), edit])
+        kept = old_nulls[name][keep] if name in old_nulls else np.zeros(int(keep.sum()), dtype=bool)
+        fresh = np.zeros(len(written), dtype=bool) if name in given else np.ones(len(written), dtype=bool)
+        mask = np.concatenate([kept, fresh])
+        if mask.any():
+            nulls[name] = mask
+    return swap_chunks(conn, layout.name, stage, geoid, touched, bases, encode(new_ids, values, spec, nulls))
