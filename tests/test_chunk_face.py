@@ -418,14 +418,16 @@ def test_roles_with_fewer_rights(db_dsn: str, conn: Conn) -> None:
         hostile.close()
         # the same with the table of kept rows (the row trigger's): refused before the statement's first row
         hostile = roles.connect("editor")
-        hostile.execute('CREATE TEMP TABLE tgsis_face_rows (face oid, op "char", newrow text, oldrow text)')
+        hostile.execute(
+            f'CREATE TEMP TABLE tgsis_face_rows_{oid[0]} (op "char", n tgsis.vrtx_face, o tgsis.vrtx_face)'
+        )
         for statement in (
             f"INSERT INTO tgsis.vrtx_face VALUES ({alpha}, 60, 0, 0, 0)",
             f"UPDATE tgsis.vrtx_face SET x = 8 WHERE geoid = {alpha} AND vrtxid = 0",
             f"DELETE FROM tgsis.vrtx_face WHERE geoid = {alpha} AND vrtxid = 0",
         ):
             assert _sqlstate(hostile, statement) == "42501", statement
-        assert hostile.execute("SELECT count(*) FROM pg_temp.tgsis_face_rows").fetchone() == (0,)
+        assert hostile.execute(f"SELECT count(*) FROM pg_temp.tgsis_face_rows_{oid[0]}").fetchone() == (0,)  # noqa: S608
         hostile.close()
         face = _sqlstate(editor, f"INSERT INTO tgsis.vrtx_face VALUES ({beta}, 50, 0, 0, 0)")
         today = _sqlstate(editor, f"INSERT INTO tgsis.vrtx VALUES ({beta}, 50, 0, 0, 0)")

@@ -98,36 +98,52 @@ def test_insert_update_delete_of_thousands_of_rows_write_each_chunk_once(
     # DEFAULT never saw them, and the session's kept rows are gone
     assert _count(conn, geoid, f"vrtxid >= {FIRST}") == 0
     if db_storage == "chunks":
-        assert conn.execute("SELECT count(*) FROM pg_temp.tgsis_face_rows").fetchone() == (0,)
+        kept = conn.execute("SELECT format('pg_temp.%I', 'tgsis_face_rows_' || 'tgsis.vrtx'::regclass::oid)").fetchone()
+        assert kept is not None
+        assert conn.execute(f"SELECT count(*) FROM {kept[0]}").fetchone() == (0,)  # noqa: S608
     conn.rollback()
 
 
-VALUES = [-0.0, math.nan, 5e-324, 0.1 + 0.2, 1 / 3, -1.7976931348623157e308, math.inf, 2.0**-1074 * 3]
+NAN_PAYLOAD = struct.unpack(">d", bytes.fromhex("7ff8000000000123"))[0]
+NEGATIVE_NAN = struct.unpack(">d", bytes.fromhex("fff0000000000001"))[0]  # a signalling NaN's bits, sign set
+VALUES = [-0.0, math.nan, NAN_PAYLOAD, NEGATIVE_NAN, 5e-324, 0.1 + 0.2, 1 / 3, -1.7976931348623157e308, math.inf, 2.0**-1074 * 3]
 
 
 def _bits(value: float) -> bytes:
     return struct.pack(">d", value)
 
 
-def test_values_are_written_bit_for_bit_whatever_the_session_s_float_digits(conn: Conn, fault_clone: int) -> None:
-    """The rows travel as text between the row and the statement trigger: pinned digits, not the session's."""
+@pytest.mark.parametrize("digits", [-15, 3])
+def test_values_are_written_bit_for_bit_whatever_the_session_s_float_digits(
+    conn: Conn, fault_clone: int, digits: int
+) -> None:
+    """The rows are kept typed between the row and the statement trigger (never as text): every bit arrives, a NaN's
+    payload and sign included, whatever the session's extra_float_digits (the values sent in binary: ``%b``)."""
     geoid = fault_clone
+    assert _bits(NAN_PAYLOAD).hex() == "7ff8000000000123"  # (the client keeps the payload)
     with tgsis.in_version(conn, "e1"):
         conn.commit()
-        conn.execute("SET extra_float_digits = -15")
+        conn.execute(f"SET extra_float_digits = {digits}")
         for k, value in enumerate(VALUES):
-            conn.execute("INSERT INTO tgsis.vrtx VALUES (%s, %s, %s, %s, %s)", (geoid, FIRST + k, value, value, 1.0))
+            conn.execute("INSERT INTO tgsis.vrtx VALUES (%s, %s, %b, %b, %s)", (geoid, FIRST + k, value, value, 1.0))
+        # one INSERT ... SELECT of all of them (many rows of one statement)
+        conn.execute(
+            "INSERT INTO tgsis.vrtx SELECT geoid, vrtxid + 100, x, y, z FROM tgsis.vrtx "
+            f"WHERE geoid = %s AND vrtxid >= {FIRST}",
+            (geoid,),
+        )
         conn.execute(
             f"UPDATE tgsis.vrtx SET z = y WHERE geoid = %s AND vrtxid >= {FIRST}", (geoid,)
         )  # an UPDATE keeps them too
+        conn.execute(f"DELETE FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = {FIRST + 101}", (geoid,))
         rows = conn.execute(
-            f"SELECT vrtxid, float8send(x), float8send(z) FROM tgsis.vrtx WHERE geoid = %s AND vrtxid >= {FIRST} ORDER BY 2",
+            f"SELECT vrtxid, float8send(x), float8send(z) FROM tgsis.vrtx WHERE geoid = %s AND vrtxid >= {FIRST} ORDER BY 1",
             (geoid,),
         ).fetchall()
         conn.rollback()
-    assert sorted((r[0], bytes(r[1]), bytes(r[2])) for r in rows) == [
-        (FIRST + k, _bits(v), _bits(v)) for k, v in enumerate(VALUES)
-    ]
+    expected = [(FIRST + k, _bits(v), _bits(v)) for k, v in enumerate(VALUES)]
+    expected += [(FIRST + 100 + k, _bits(v), _bits(v)) for k, v in enumerate(VALUES) if k != 1]
+    assert sorted((r[0], bytes(r[1]), bytes(r[2])) for r in rows) == sorted(expected)
 
 
 def test_a_key_there_or_twice_fails_the_statement_and_writes_nothing(conn: Conn, fault_clone: int) -> None:

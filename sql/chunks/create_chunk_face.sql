@@ -105,9 +105,9 @@ BEGIN
     -- each row kept (tgsis.chunk_face_queue, its session table checked before the statement), all of them
     -- checked and written when the statement ends (tgsis.chunk_face_write): one rewrite per touched chunk
     EXECUTE format('CREATE TRIGGER tgsis_chunk_face INSTEAD OF INSERT OR UPDATE OR DELETE ON %s '
-                   'FOR EACH ROW EXECUTE FUNCTION tgsis.chunk_face_queue()', v_face);
+                   'FOR EACH ROW EXECUTE FUNCTION tgsis.chunk_face_queue(%L)', v_face, p_table);
     EXECUTE format('CREATE TRIGGER tgsis_chunk_face_queue BEFORE INSERT OR UPDATE OR DELETE ON %s '
-                   'FOR EACH STATEMENT EXECUTE FUNCTION tgsis.chunk_face_queue()', v_face);
+                   'FOR EACH STATEMENT EXECUTE FUNCTION tgsis.chunk_face_queue(%L)', v_face, p_table);
     EXECUTE format('CREATE TRIGGER tgsis_chunk_face_flush AFTER INSERT OR UPDATE OR DELETE ON %s '
                    'FOR EACH STATEMENT EXECUTE FUNCTION tgsis.chunk_face_write(%L)', v_face, p_table);
     -- a snapshot older than the chunk table's last rewrite sees it empty: its writes are refused (40001)
