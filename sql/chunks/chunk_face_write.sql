@@ -40,8 +40,9 @@
 --     is there, also when the statement moves another row away from it: a
 --     plain table's key is checked row by row as well); RETURNING returns the
 --     row given (chunk_face_queue's NEW or OLD);
---   * the statement's rows, moved from pg_temp.tgsis_face_rows_<view oid> (kept
---     typed, the face's row type, by tgsis.chunk_face_queue) into the face's
+--   * the statement's rows, moved from pg_temp.tgsis_face_rows_<view oid> and
+--     tgsis_face_dels_<view oid> (kept typed, the face's row type, by
+--     tgsis.chunk_face_queue) into the face's
 --     queue pg_temp.tgsis_face_queue_<view oid> (the session's, owned by the
 --     storage's owner), are checked and written all at once:
 --     the chunks they touch locked in key order, compared set-based, written
@@ -79,6 +80,7 @@ DECLARE
     v_now       text := format('pg_temp.%I', 'tgsis_face_now_' || TG_RELID);
     v_queue     text := format('pg_temp.%I', 'tgsis_face_queue_' || TG_RELID);
     v_rows      text := format('pg_temp.%I', 'tgsis_face_rows_' || TG_RELID);  -- the statement's rows (tgsis.chunk_face_queue)
+    v_dels      text := format('pg_temp.%I', 'tgsis_face_dels_' || TG_RELID);  -- its DELETE's rows read
     v_kc        text;      -- the object key column (geoid)
     v_cc        text;      -- the chunk column (the local id)
     v_keycols   text[];    -- the row key: the key columns, then the chunk column
@@ -147,13 +149,15 @@ BEGIN
     -- the statement's rows kept by tgsis.chunk_face_queue (its table checked before the statement), as the
     -- face's rows: an INSERT's row, a DELETE's (the row read), an UPDATE keeping the key (the new row and the
     -- row read); an UPDATE changing the key is a delete of the row read and an insert of the new row
-    IF to_regclass(v_rows) IS NULL THEN
+    IF to_regclass(v_rows) IS NULL OR to_regclass(v_dels) IS NULL THEN
         RETURN NULL;
     END IF;
-    IF (SELECT c.relowner FROM pg_class c WHERE c.oid = to_regclass(v_rows)) <> (SELECT r.oid FROM pg_roles r WHERE r.rolname = current_user) THEN
-        RAISE EXCEPTION 'the session''s table % was not made by the face''s trigger', v_rows
-            USING ERRCODE = 'insufficient_privilege', HINT = 'drop the temporary table and write again';
-    END IF;
+    FOREACH v_tab IN ARRAY ARRAY[v_rows, v_dels] LOOP
+        IF (SELECT c.relowner FROM pg_class c WHERE c.oid = to_regclass(v_tab)) <> (SELECT r.oid FROM pg_roles r WHERE r.rolname = current_user) THEN
+            RAISE EXCEPTION 'the session''s table % was not made by the face''s trigger', v_tab
+                USING ERRCODE = 'insufficient_privilege', HINT = 'drop the temporary table and write again';
+        END IF;
+    END LOOP;
     -- an UPDATE moving rows between a feature of a class without versioning and a versioned feature: TG300
     -- (tgsis.unversioned_revision), as today's view refuses it, never two writes in two revisions
     IF v_objclass = 'feature' AND EXISTS (SELECT FROM tgsis.unversioned_features) THEN
@@ -166,14 +170,17 @@ BEGIN
         END LOOP;
     END IF;
     -- the kept rows, typed (the face's row type: bit for bit), moved into the queue
-    EXECUTE format('WITH kept AS (DELETE FROM %1$s r RETURNING r.op, r.n, r.o), '
+    EXECUTE format('WITH r AS (DELETE FROM %1$s r RETURNING r.op, r.n, r.o), '
+                   '     d AS (DELETE FROM %4$s d RETURNING d.o), '
+                   '     kept AS (SELECT r.op, r.n, r.o FROM r UNION ALL SELECT ''D''::"char", NULL::%5$s, d.o FROM d), '
                    '     k AS (SELECT kept.*, kept.op = ''U'' AND %3$s AS same FROM kept) '
                    'INSERT INTO %2$s SELECT (x.r).*, x.del, x.old FROM ('
                    '  SELECT k.n AS r, false AS del, CASE WHEN k.same THEN k.o END AS old FROM k WHERE k.op IN (''I'', ''U'') '
                    '  UNION ALL SELECT k.o, true, k.o FROM k WHERE k.op = ''D'' OR (k.op = ''U'' AND NOT k.same)) x',
                    v_rows, v_queue,
                    array_to_string(ARRAY(SELECT format('(kept.n).%1$I IS NOT DISTINCT FROM (kept.o).%1$I', k)
-                                           FROM unnest(v_keycols) AS k), ' AND '));
+                                           FROM unnest(v_keycols) AS k), ' AND '),
+                   v_dels, v_face);
 
     <<groups>>
     LOOP
