@@ -418,9 +418,7 @@ def test_roles_with_fewer_rights(db_dsn: str, conn: Conn) -> None:
         hostile.close()
         # the same with the table of kept rows (the row trigger's): refused before the statement's first row
         hostile = roles.connect("editor")
-        hostile.execute(
-            f'CREATE TEMP TABLE tgsis_face_rows_{oid[0]} (op "char", n tgsis.vrtx_face, o tgsis.vrtx_face)'
-        )
+        hostile.execute(f'CREATE TEMP TABLE tgsis_face_rows_{oid[0]} (op "char", n tgsis.vrtx_face, o tgsis.vrtx_face)')
         for statement in (
             f"INSERT INTO tgsis.vrtx_face VALUES ({alpha}, 60, 0, 0, 0)",
             f"UPDATE tgsis.vrtx_face SET x = 8 WHERE geoid = {alpha} AND vrtxid = 0",

@@ -106,7 +106,18 @@ def test_insert_update_delete_of_thousands_of_rows_write_each_chunk_once(
 
 NAN_PAYLOAD = struct.unpack(">d", bytes.fromhex("7ff8000000000123"))[0]
 NEGATIVE_NAN = struct.unpack(">d", bytes.fromhex("fff0000000000001"))[0]  # a signalling NaN's bits, sign set
-VALUES = [-0.0, math.nan, NAN_PAYLOAD, NEGATIVE_NAN, 5e-324, 0.1 + 0.2, 1 / 3, -1.7976931348623157e308, math.inf, 2.0**-1074 * 3]
+VALUES = [
+    -0.0,
+    math.nan,
+    NAN_PAYLOAD,
+    NEGATIVE_NAN,
+    5e-324,
+    0.1 + 0.2,
+    1 / 3,
+    -1.7976931348623157e308,
+    math.inf,
+    2.0**-1074 * 3,
+]
 
 
 def _bits(value: float) -> bytes:
