@@ -72,6 +72,14 @@ BEGIN
             USING ERRCODE = 'TG100',
                   HINT = format('write its rows through the face tgsis.%I or tgsis.insert_chunk_rows', p_table);
     END IF;
+    -- (a model table with columns of role 'value', a G-map dart's acellid and positive: its chunks carry arrays this
+    -- path does not write, which would be left NULL)
+    IF EXISTS (SELECT FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'value') THEN
+        RAISE EXCEPTION 'tgsis.% has columns tgsis.% does not write: %', quote_ident(p_table), 'swap_object_chunks',
+                        (SELECT string_agg(c.name, ', ' ORDER BY c.colorder) FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'value')
+            USING ERRCODE = 'TG100',
+                  HINT = format('write its rows through the face tgsis.%I or tgsis.insert_chunk_rows', p_table);
+    END IF;
     v_stage := format('pg_temp.%I', 'tgsis_object_chunks_' || p_table);
     IF to_regclass(v_stage) IS NULL
        OR (SELECT c.relowner FROM pg_class c WHERE c.oid = to_regclass(v_stage))
