@@ -122,13 +122,22 @@ def test_model1_tables_are_registered_for_chunks(conn: Conn) -> None:
         ("trgl", "trglid", ["vrtxid1", "vrtxid2", "vrtxid3"], 1024),
         ("vrtx", "vrtxid", [], 1024),
     ]
-    # model 2's time tables and model 3's triangles and node positions are registered for chunks, not stored in them
-    # by default; the columns say what they are
+    # model 2's time tables, model 3's triangles and node positions and the G-maps' darts and involutions (models 4
+    # and 5) are registered for chunks, not stored in them by default; the columns say what they are
     assert conn.execute(
         "SELECT array_agg(tablename || ':' || chunkcolumn || ':' || chunkdefault ORDER BY tablename) FROM tgsis.model_tables"
         " WHERE model <> 1 AND chunkcolumn IS NOT NULL"
     ).fetchone() == (
-        ["d4dtrgl:trglid:false", "d4dvrtx:nodeid:false", "times_trgl:trglid:false", "times_vrtx:vrtxid:false"],
+        [
+            "d4dtrgl:trglid:false",
+            "d4dvrtx:nodeid:false",
+            "gmap_alpha:dartid:false",
+            "gmap_dart:dartid:false",
+            "md_alpha:dartid:false",
+            "md_dart:dartid:false",
+            "times_trgl:trglid:false",
+            "times_vrtx:vrtxid:false",
+        ],
     )
     assert conn.execute(
         "SELECT bool_and(chunkdefault = (model = 1)) FROM tgsis.model_tables WHERE chunkcolumn IS NOT NULL"

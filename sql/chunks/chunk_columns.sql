@@ -14,9 +14,12 @@
 -- by chunk = id >> log2(chunksize)), 'float' (a double precision column of a
 -- model table: a double precision[] of the same name, never NULL but at
 -- holes), 'ref' (a vertex-id column: integer[] relative to vbase, and
--- <name>_wide), 'value' (a property column of a class's table: an array of
--- its own type, smallint, integer, bigint, real, double precision or
--- boolean, whose elements may be NULL: only holes marks a hole). typename is
+-- <name>_wide), 'value' (a property column of a class's table, or a model
+-- table's scalar column that is neither a ref nor double precision, as a
+-- G-map dart's acellid and positive: an array of its own type, smallint,
+-- integer, bigint, real, double precision or boolean, whose elements may be
+-- NULL: only holes marks a hole; a model table keeps at least one float or
+-- ref column, NOT NULL, whose NULL marks the hole as before). typename is
 -- the column's type (format_type). A column of any other type (a vector
 -- property among them: its 2-D form is not built) is refused by name (TG100).
 CREATE FUNCTION tgsis.chunk_columns(p_table text)
@@ -88,6 +91,8 @@ BEGIN
                 WHEN v_class THEN NULL
                 WHEN a.attname = ANY (v_reg.chunkrefs) AND a.atttypid = 'bigint'::regtype THEN 'ref'
                 WHEN a.atttypid = 'double precision'::regtype AND NOT a.attname = ANY (v_reg.chunkrefs) THEN 'float'
+                -- a model table's other scalar column (a G-map dart's acellid, positive: NULL allowed)
+                WHEN a.atttypid = ANY (v_types) AND NOT a.attname = ANY (v_reg.chunkrefs) THEN 'value'
            END,
            pk.keyorder,
            row_number() OVER (ORDER BY a.attnum)::integer,
@@ -106,7 +111,7 @@ BEGIN
                                                        AND a.attnum = ANY (con.conkey))
        AND NOT (NOT v_class AND a.attname = ANY (v_reg.chunkrefs) AND a.atttypid = 'bigint'::regtype)
        AND NOT (NOT v_class AND a.atttypid = 'double precision'::regtype AND NOT a.attname = ANY (v_reg.chunkrefs))
-       AND NOT (v_class AND a.atttypid = ANY (v_types));
+       AND NOT (a.atttypid = ANY (v_types) AND NOT (NOT v_class AND a.attname = ANY (v_reg.chunkrefs)));
     IF v_class AND v_bad IS NULL
        AND NOT EXISTS (SELECT FROM pg_attribute a
                         WHERE a.attrelid = v_storage AND a.attnum > 0 AND NOT a.attisdropped AND a.atttypid = ANY (v_types)
@@ -114,6 +119,18 @@ BEGIN
                           AND NOT EXISTS (SELECT FROM pg_constraint con WHERE con.conrelid = v_storage AND con.contype = 'p'
                                                                           AND a.attnum = ANY (con.conkey))) THEN
         v_bad := 'no property column (a chunk holds one array per property)';
+    END IF;
+    -- a model table's slot is present where its first double precision or vertex-id column is not NULL (those
+    -- are NOT NULL in the row table; a 'value' column may be NULL at a present slot): it needs one
+    IF NOT v_class AND v_bad IS NULL
+       AND NOT EXISTS (SELECT FROM pg_attribute a
+                        WHERE a.attrelid = v_storage AND a.attnum > 0 AND NOT a.attisdropped
+                          AND a.attname NOT IN ('revision', 'lastrevs', 'revclosed', v_reg.chunkcolumn)
+                          AND ((a.atttypid = 'double precision'::regtype AND NOT a.attname = ANY (v_reg.chunkrefs))
+                               OR (a.atttypid = 'bigint'::regtype AND a.attname = ANY (v_reg.chunkrefs)))
+                          AND NOT EXISTS (SELECT FROM pg_constraint con WHERE con.conrelid = v_storage AND con.contype = 'p'
+                                                                          AND a.attnum = ANY (con.conkey))) THEN
+        v_bad := 'no double precision nor vertex-id column (a model table''s slot is present where the first is not NULL)';
     END IF;
     IF v_bad IS NOT NULL
        OR NOT EXISTS (SELECT FROM pg_constraint con JOIN pg_attribute a ON a.attrelid = con.conrelid AND a.attnum = ANY (con.conkey)
@@ -129,7 +146,8 @@ BEGIN
                                             'smallint, integer, bigint, real, double precision or boolean (vector properties '
                                             'have no chunk form yet); not so: %s.', v_reg.chunkcolumn, coalesce(v_bad, 'the chunk column'))
                                 ELSE format('The chunk column %s must be a bigint of the primary key, the ref columns %s bigint '
-                                            'columns, every other non-key column double precision; not so: %s.',
+                                            'columns, every other non-key column double precision or a scalar smallint, '
+                                            'integer, bigint, real or boolean, and one a double precision or ref column; not so: %s.',
                                             v_reg.chunkcolumn, v_reg.chunkrefs, coalesce(v_bad, 'the chunk or ref columns')) END,
                   HINT = 'register the table with chunkcolumn NULL (stored as rows) until the layout has a form for these columns';
     END IF;
@@ -139,4 +157,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.chunk_columns(text) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.chunk_columns(text) IS
-    'the columns of a table of tgsis.chunk_registry (a model table registered for chunks, or a STATIC class''s property table named schema.table), from its live storage, in column order, each with its role in the chunk table: key, chunk (the local id), float (double precision[]), ref (integer[] relative to vbase, and <name>_wide) or value (a property: an array of its type, NULL elements allowed), and its type; TG200 for a table not registered for chunks, TG100 for a column the layout has no form for (a vector property among them)';
+    'the columns of a table of tgsis.chunk_registry (a model table registered for chunks, or a STATIC class''s property table named schema.table), from its live storage, in column order, each with its role in the chunk table: key, chunk (the local id), float (double precision[]), ref (integer[] relative to vbase, and <name>_wide) or value (a property, or a model table''s other scalar column: an array of its type, NULL elements allowed), and its type; TG200 for a table not registered for chunks, TG100 for a column the layout has no form for (a vector property among them)';

@@ -1,7 +1,8 @@
 -- tgsis.create_chunk_table(table): create <schema>.<table>_chunk, the chunk storage of a model table or of a class's property table (issue 40).
 -- The layout is the contract of docs/storage.md ("Chunks and the mapping of
 -- ids", "Compression, bit-exact", "Versioning of chunks"): the row table's key
--- with its local-id column replaced by chunk (= id >> log2(chunksize)), then
+-- with its local-id column replaced by chunk (= id >> log2(chunksize)) and put
+-- last, then
 -- revision, lastrevs, revclosed as in <table>_ver, holes, vbase and vtop (a
 -- bound of its vertex ids: the readers of the cells on given vertices skip the
 -- chunks whose [vbase, vtop] misses them) for a table
@@ -59,8 +60,11 @@ BEGIN
     v_float := CASE WHEN EXISTS (SELECT FROM pg_settings WHERE name = 'default_toast_compression' AND 'lz4' = ANY (enumvals))
                     THEN 'lz4' ELSE 'pglz' END;
 
-    -- the key (in the primary key's order, the chunk column replaced), the versioning columns, holes, vbase
-    FOR v_c IN SELECT c.name, c.role FROM tgsis.chunk_columns(p_table) c WHERE c.keyorder IS NOT NULL ORDER BY c.keyorder LOOP
+    -- the key (in the primary key's order, the chunk column replaced and moved last: the readers and the face's
+    -- writer match a row's chunk by the key before revision, chunk last; a G-map involution's key (geoid, dartid,
+    -- level) is (geoid, level, chunk)), the versioning columns, holes, vbase
+    FOR v_c IN SELECT c.name, c.role FROM tgsis.chunk_columns(p_table) c WHERE c.keyorder IS NOT NULL
+                ORDER BY c.role = 'chunk', c.keyorder LOOP
         v_key := concat_ws(', ', v_key, CASE WHEN v_c.role = 'chunk' THEN 'chunk' ELSE quote_ident(v_c.name) END);
         v_defs := v_defs || CASE WHEN v_c.role = 'chunk' THEN 'chunk bigint NOT NULL'
                                  ELSE format('%I %s NOT NULL', v_c.name,

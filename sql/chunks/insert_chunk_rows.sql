@@ -1,12 +1,15 @@
--- tgsis.insert_chunk_rows(table, columns, ints, floats): insert new rows of a model table stored in chunks, for the calling role, set-based.
+-- tgsis.insert_chunk_rows(table, columns, ints, floats, bools): insert new rows of a model table stored in chunks, for the calling role, set-based.
 -- The bulk insert of the tables whose writers COPY rows (model 2's
 -- times_vrtx and times_trgl: tgsis.insert_series, add_instant, the check-in
 -- and merges of model 2; src/tgsis/db/_transfer.py, Storage.copy): once the
 -- table is stored in chunks its name is a face, and an INSERT through it
 -- rewrites a chunk per row (tgsis.chunk_face_write). Here the rows (p_ints one
--- row per bigint column, p_floats one per double precision column, each
--- (columns x rows), the columns named by p_columns: the bigint ones then the
--- double ones, together exactly the row table's) are written by one call of
+-- row per bigint, integer or smallint column, p_floats one per double precision column, p_bools
+-- one per boolean column, each (columns x rows), the columns named by
+-- p_columns: the bigint ones, the double ones, then the boolean ones; every
+-- column of the row table but those that may be NULL, which are NULL when not
+-- named, as a COPY leaves them: a G-map dart's acellid and positive) are
+-- written by one call of
 -- the one writer of chunk contents (tgsis.write_chunk_rows: each touched
 -- chunk once, in the working revision) after the checks of an INSERT through
 -- the face: INSERT on the face (42501), the class's write right on every
@@ -27,7 +30,8 @@
 -- tgsis.write_chunk_rows refuses (NULL values, negative ids, a key twice, a
 -- key equal to a stored one of other bits, a CHECK of the row table).
 -- Returns the number of chunks written.
-CREATE FUNCTION tgsis.insert_chunk_rows(p_table text, p_columns text[], p_ints bigint[], p_floats double precision[])
+CREATE FUNCTION tgsis.insert_chunk_rows(p_table text, p_columns text[], p_ints bigint[], p_floats double precision[],
+                                        p_bools boolean[] DEFAULT NULL)
 RETURNS bigint
 LANGUAGE plpgsql
 VOLATILE
@@ -41,6 +45,8 @@ DECLARE
     v_tab     text;
     v_icols   text[];
     v_fcols   text[];
+    v_bcols   text[];
+    v_given   text[];
     v_key     text[];
     v_n       integer;
     v_keys    text[];
@@ -59,28 +65,47 @@ BEGIN
                   HINT = 'write the rows of a table stored as rows through its view or storage';
     END IF;
     v_face := format('tgsis.%I', p_table);
-    -- the row table's columns by type, in column order: the bigint ones (keys, ids, vertex ids), the double ones
-    v_icols := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.typename = 'bigint' ORDER BY c.colorder);
+    -- the row table's columns named, by type, in the caller's order: the bigint ones (keys, ids, vertex ids), the
+    -- double ones, the boolean ones; a column not named must be one that may be NULL (NULL then, as in a COPY)
+    v_given := coalesce(p_columns, '{}');
+    -- (a smallint or integer column, a G-map involution's level, travels among the bigint ones: its value is cast
+    -- on insert, out of range an error as a COPY's)
+    v_icols := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.typename IN ('bigint', 'integer', 'smallint')
+                      ORDER BY c.colorder);
     v_fcols := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.typename = 'double precision' ORDER BY c.colorder);
+    v_bcols := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.typename = 'boolean' ORDER BY c.colorder);
     v_key := tgsis.chunk_key(p_table) || v_reg.chunkcolumn;
     v_n := coalesce(array_length(p_ints, 2), 0);
-    IF p_columns IS NULL OR cardinality(p_columns) <> cardinality(v_icols || v_fcols)
-       OR (SELECT array_agg(c ORDER BY c) FROM unnest(p_columns[1:cardinality(v_icols)]) AS c)
-          IS DISTINCT FROM (SELECT array_agg(c ORDER BY c) FROM unnest(v_icols) AS c)
-       OR (SELECT coalesce(array_agg(c ORDER BY c), '{}') FROM unnest(p_columns[cardinality(v_icols) + 1:]) AS c)
-          IS DISTINCT FROM (SELECT coalesce(array_agg(c ORDER BY c), '{}') FROM unnest(v_fcols) AS c)
+    v_icols := ARRAY(SELECT c FROM unnest(v_given) WITH ORDINALITY AS u(c, o) WHERE c = ANY (v_icols) ORDER BY o);
+    v_fcols := ARRAY(SELECT c FROM unnest(v_given) WITH ORDINALITY AS u(c, o) WHERE c = ANY (v_fcols) ORDER BY o);
+    v_bcols := ARRAY(SELECT c FROM unnest(v_given) WITH ORDINALITY AS u(c, o) WHERE c = ANY (v_bcols) ORDER BY o);
+    IF p_columns IS NULL OR v_given IS DISTINCT FROM v_icols || v_fcols || v_bcols
+       OR cardinality(v_given) <> (SELECT count(DISTINCT c) FROM unnest(v_given) AS c)
+       OR EXISTS (SELECT FROM tgsis.chunk_columns(p_table) c
+                   JOIN pg_attribute a ON a.attrelid = tgsis.row_shape(p_table) AND a.attname = c.name
+                  WHERE NOT c.name = ANY (v_given) AND (a.attnotnull OR c.role IN ('key', 'chunk', 'float', 'ref')))
        OR array_ndims(p_ints) IS DISTINCT FROM 2 OR array_length(p_ints, 1) <> cardinality(v_icols)
        OR (cardinality(v_fcols) > 0 AND (array_ndims(p_floats) IS DISTINCT FROM 2
                                          OR array_length(p_floats, 1) <> cardinality(v_fcols)
                                          OR array_length(p_floats, 2) <> v_n))
-       OR (cardinality(v_fcols) = 0 AND coalesce(cardinality(p_floats), 0) > 0) THEN
+       OR (cardinality(v_fcols) = 0 AND coalesce(cardinality(p_floats), 0) > 0)
+       OR (cardinality(v_bcols) > 0 AND (array_ndims(p_bools) IS DISTINCT FROM 2
+                                         OR array_length(p_bools, 1) <> cardinality(v_bcols)
+                                         OR array_length(p_bools, 2) <> v_n))
+       OR (cardinality(v_bcols) = 0 AND coalesce(cardinality(p_bools), 0) > 0) THEN
         RAISE EXCEPTION 'the rows to insert into tgsis.% do not match its columns', quote_ident(p_table)
             USING ERRCODE = 'TG100',
-                  DETAIL = format('columns %s; ints %s for the bigint columns (%s), floats %s for the double precision columns (%s).',
+                  DETAIL = format('columns %s; ints %s for the bigint columns, floats %s for the double precision columns, '
+                                  'bools %s for the boolean columns; the columns are %s (%s may be left out: NULL).',
                                   coalesce(p_columns::text, 'NULL'), coalesce(array_dims(p_ints), 'NULL'),
-                                  array_to_string(v_icols, ', '), coalesce(array_dims(p_floats), 'NULL'),
-                                  array_to_string(v_fcols, ', ')),
-                  HINT = 'name every column once, the bigint ones first, and give one row of values per column, as long as the rows';
+                                  coalesce(array_dims(p_floats), 'NULL'), coalesce(array_dims(p_bools), 'NULL'),
+                                  (SELECT string_agg(format('%s %s', c.name, c.typename), ', ' ORDER BY c.colorder)
+                                     FROM tgsis.chunk_columns(p_table) c),
+                                  coalesce((SELECT string_agg(c.name, ', ' ORDER BY c.colorder) FROM tgsis.chunk_columns(p_table) c
+                                              JOIN pg_attribute a ON a.attrelid = tgsis.row_shape(p_table) AND a.attname = c.name
+                                             WHERE c.role = 'value' AND NOT a.attnotnull), 'none')),
+                  HINT = 'name every column once (the bigint ones, then the double precision ones, then the boolean ones) '
+                         'and give one row of values per column, as long as the rows';
     END IF;
     IF v_n = 0 THEN
         RETURN 0;
@@ -118,10 +143,11 @@ BEGIN
     END IF;
     -- each column a slice of the (columns x rows) arrays, unnested side by side
     v_vals := array_to_string(ARRAY(SELECT format('$1[%s:%s][:]', o, o) FROM generate_series(1, cardinality(v_icols)) AS o)
-                              || ARRAY(SELECT format('$2[%s:%s][:]', o, o) FROM generate_series(1, cardinality(v_fcols)) AS o), ', ');
+                              || ARRAY(SELECT format('$2[%s:%s][:]', o, o) FROM generate_series(1, cardinality(v_fcols)) AS o)
+                              || ARRAY(SELECT format('$3[%s:%s][:]', o, o) FROM generate_series(1, cardinality(v_bcols)) AS o), ', ');
     EXECUTE format('INSERT INTO %s (%s, _delete) SELECT u.*, false FROM unnest(%s) AS u',
                    v_tab, array_to_string(ARRAY(SELECT quote_ident(c) FROM unnest(p_columns) AS c), ', '), v_vals)
-      USING p_ints, p_floats;
+      USING p_ints, p_floats, p_bools;
     -- a key visible already: the rows' primary key would refuse it, the face refuses it (read after the objects'
     -- write locks: no writer of them is in flight; only the chunks holding the rows' ids are decoded)
     v_ids := ARRAY(SELECT DISTINCT i FROM unnest(p_ints[array_position(p_columns, v_reg.chunkcolumn):array_position(p_columns, v_reg.chunkcolumn)][:]) AS i
@@ -154,5 +180,5 @@ BEGIN
 END
 $$;
 
-COMMENT ON FUNCTION tgsis.insert_chunk_rows(text, text[], bigint[], double precision[]) IS
-    'insert new rows of a model table stored in chunks for the calling role, set-based (INSERT on the face, the class''s write right, the version''s, object locks): the bigint columns then the double precision columns named, their values as (columns x rows) arrays; a key visible already is 23505 as on rows; every touched chunk rewritten once by tgsis.write_chunk_rows; the objects noted as changed; returns the chunks written';
+COMMENT ON FUNCTION tgsis.insert_chunk_rows(text, text[], bigint[], double precision[], boolean[]) IS
+    'insert new rows of a model table stored in chunks for the calling role, set-based (INSERT on the face, the class''s write right, the version''s, object locks): the bigint columns, the double precision columns, then the boolean columns named (a column that may be NULL may be left out: NULL), their values as (columns x rows) arrays; a key visible already is 23505 as on rows; every touched chunk rewritten once by tgsis.write_chunk_rows; the objects noted as changed; returns the chunks written';

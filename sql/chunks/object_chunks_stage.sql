@@ -52,6 +52,14 @@ BEGIN
             USING ERRCODE = 'TG100',
                   HINT = format('write its rows through the face tgsis.%I or tgsis.insert_chunk_rows', p_table);
     END IF;
+    -- (a model table with columns of role 'value', a G-map dart's acellid and positive: model 1's client encodes no
+    -- such arrays, which would be left NULL; a class's property table is all 'value's, encoded by its own client path)
+    IF v_reg.classname IS NULL AND EXISTS (SELECT FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'value') THEN
+        RAISE EXCEPTION 'tgsis.% has columns tgsis.% does not write: %', quote_ident(p_table), 'object_chunks_stage',
+                        (SELECT string_agg(c.name, ', ' ORDER BY c.colorder) FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'value')
+            USING ERRCODE = 'TG100',
+                  HINT = format('write its rows through the face tgsis.%I or tgsis.insert_chunk_rows', p_table);
+    END IF;
     v_stage := format('pg_temp.%I', 'tgsis_object_chunks_'
                                     || CASE WHEN v_reg.classname IS NULL THEN p_table ELSE tgsis.chunk_table_of(p_table)::oid::text END);
     v_cols := array_to_string(ARRAY[quote_ident(v_reg.keycolumn), 'chunk', 'revision', 'holes']

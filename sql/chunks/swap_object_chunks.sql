@@ -87,6 +87,14 @@ BEGIN
             USING ERRCODE = 'TG100',
                   HINT = format('write its rows through the face tgsis.%I or tgsis.insert_chunk_rows', p_table);
     END IF;
+    -- (a model table with columns of role 'value', a G-map dart's acellid and positive: model 1's client encodes no
+    -- such arrays, which would be left NULL; a class's property table is all 'value's, encoded by its own client path)
+    IF v_reg.classname IS NULL AND EXISTS (SELECT FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'value') THEN
+        RAISE EXCEPTION 'tgsis.% has columns tgsis.% does not write: %', quote_ident(p_table), 'swap_object_chunks',
+                        (SELECT string_agg(c.name, ', ' ORDER BY c.colorder) FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'value')
+            USING ERRCODE = 'TG100',
+                  HINT = format('write its rows through the face tgsis.%I or tgsis.insert_chunk_rows', p_table);
+    END IF;
     v_objclass := CASE WHEN v_reg.classname IS NULL
                        THEN (SELECT t.objectclass FROM tgsis.model_tables t WHERE t.tablename = v_reg.tablename)
                        ELSE 'feature' END;

@@ -255,11 +255,14 @@ BEGIN
                                   || ARRAY(SELECT format('v.%I, v.%I', r, r || '_wide') FROM unnest(v_refs) AS r), ', '),
         'alias', array_to_string(ARRAY(SELECT quote_ident(f) FROM unnest(v_floats) AS f)
                                  || ARRAY(SELECT format('%I, %I', r, r || '_wide') FROM unnest(v_refs) AS r), ', '),
-        -- a slot present in the merged chunk: a model table's first value column is NOT NULL exactly there (its
-        -- columns are all NOT NULL); a class's property may be NULL, so there an old slot is present when it is
-        -- within the old arrays and not one of their holes, a new one when it is not deleted
+        -- a slot present in the merged chunk: a model table's first double precision or vertex-id column is NOT NULL
+        -- exactly there (those columns are NOT NULL; its 'value' columns, a G-map dart's acellid, may be NULL); a
+        -- class's property may be NULL, so there an old slot is present when it is within the old arrays and not
+        -- one of their holes, a new one when it is not deleted
         'mpresent', CASE WHEN v_reg.classname IS NOT NULL THEN 'm._present'
-                         ELSE format('m.%I IS NOT NULL', coalesce(v_floats[1], v_refs[1])) END,
+                         ELSE format('m.%I IS NOT NULL',
+                                     (SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref')
+                                       ORDER BY c.colorder LIMIT 1)) END,
         'presentcol', CASE WHEN v_reg.classname IS NOT NULL
                            THEN format(', CASE WHEN u.slot IS NULL THEN o.slot <= coalesce(cardinality(v.%I), 0) '
                                        'AND NOT coalesce(o.slot = ANY (v.holes), false) ELSE NOT u._delete END AS _present',

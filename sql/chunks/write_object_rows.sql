@@ -63,6 +63,14 @@ BEGIN
                   DETAIL = 'tgsis.write_object_rows writes the model tables switched to chunks (tgsis.stored_in_chunks).',
                   HINT = 'write the rows of a table stored as rows through its view or storage';
     END IF;
+    -- (a model table with columns of role 'value', a G-map dart's acellid and positive: this path's arrays do not
+    -- carry them, which would be left NULL)
+    IF EXISTS (SELECT FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'value') THEN
+        RAISE EXCEPTION 'tgsis.% has columns tgsis.write_object_rows does not write: %', quote_ident(p_table),
+                        (SELECT string_agg(c.name, ', ' ORDER BY c.colorder) FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'value')
+            USING ERRCODE = 'TG100',
+                  HINT = format('write its rows through the face tgsis.%I or tgsis.insert_chunk_rows', p_table);
+    END IF;
     v_face := format('tgsis.%I', p_table);
     v_floats := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'float' ORDER BY c.colorder);
     v_refs := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder);

@@ -120,10 +120,15 @@ UPDATE tgsis.model_tables t SET chunkcolumn = c.chunkcolumn, chunkrefs = c.chunk
                ('segment', 'segid', '{vrtxid1,vrtxid2}', true), ('trgl', 'trglid', '{vrtxid1,vrtxid2,vrtxid3}', true),
                ('tetra', 'tetraid', '{vrtxid1,vrtxid2,vrtxid3,vrtxid4}', true),
                ('times_vrtx', 'vrtxid', '{}', false), ('times_trgl', 'trglid', '{vrtxid1,vrtxid2,vrtxid3}', false),
-               ('d4dtrgl', 'trglid', '{nodeid1,nodeid2,nodeid3}', false), ('d4dvrtx', 'nodeid', '{}', false))
+               ('d4dtrgl', 'trglid', '{nodeid1,nodeid2,nodeid3}', false), ('d4dvrtx', 'nodeid', '{}', false),
+               ('gmap_dart', 'dartid', '{nodeid}', false), ('gmap_alpha', 'dartid', '{dartid2}', false),
+               ('md_dart', 'dartid', '{vrtxid}', false), ('md_alpha', 'dartid', '{dartid2}', false))
        AS c (tablename, chunkcolumn, chunkrefs, dflt)
  WHERE t.tablename = c.tablename;
 -- @handled model1/storage.sql
+-- (the G-map darts and involutions, models 4 and 5: registered for chunks, stored as rows until switched)
+-- @handled model4/storage.sql
+-- @handled model5/storage.sql
 
 -- ---- issue40-chunk-layout: the chunk layout of a table cannot change under its chunk table (a trigger on
 -- tgsis.model_tables; chunks/chunk_layout_guard.sql says why): made whole here, before the generated

@@ -360,7 +360,8 @@ def pytest_configure(config: pytest.Config) -> None:
 def time_storage() -> Literal["rows", "chunks"]:
     """The storage of the time models' tables registered for chunks in the templates: ``$TGSIS_TEST_TIME_STORAGE``.
 
-    Model 2's times_vrtx and times_trgl, model 3's d4dtrgl and d4dvrtx (``tgsis.model_tables``).
+    Model 2's times_vrtx and times_trgl, model 3's d4dtrgl and d4dvrtx, the G-maps' gmap_dart, gmap_alpha, md_dart
+    and md_alpha (models 4 and 5): every table ``tgsis.model_tables`` registers for chunks but not by default.
 
     ``rows`` (the default, the product's) or ``chunks``: the templates' tables registered for chunks but not by
     default (``tgsis.model_tables.chunkdefault``) are then switched by ``tgsis.store_in_chunks`` after the install.
@@ -379,7 +380,7 @@ def time_storage() -> Literal["rows", "chunks"]:
 def _install_template(conn: psycopg.Connection[Any], method: Literal["extension", "sql"], storage: str) -> str:
     """Install tgsis into a template database with model 1 stored in ``storage``; the route taken.
 
-    The time models' tables (model 2's, model 3's) are stored as :func:`time_storage` says.
+    The tables registered for chunks but not by default (models 2 to 5) are stored as :func:`time_storage` says.
     """
     route = install(conn, method=method, storage="rows" if storage == "rows" else "chunks").method
     if time_storage() == "chunks":
@@ -510,7 +511,7 @@ def pytest_terminal_summary(terminalreporter: Any) -> None:
         f" (model 1 in: {', '.join(_SESSION.get('storages', [])) or 'no template made'}; default storage: "
         f"{default_storage()}"
         + (", the other one for every other file" if os.environ.get("TGSIS_TEST_STORAGE_BY_FILE") == "1" else "")
-        + ("; models 2 and 3's time tables in chunks" if time_storage() == "chunks" else "")
+        + ("; models 2 to 5's tables registered for chunks in chunks" if time_storage() == "chunks" else "")
         + "); CREATE EXTENSION tgsis: "
         + ("available" if server.extension_files is None else f"NOT available ({server.extension_files})")
     )

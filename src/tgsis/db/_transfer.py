@@ -432,8 +432,9 @@ def copy_in(conn: Conn, table: sql.Composable, columns: Sequence[str], payload: 
 def insert_chunk_rows(conn: Conn, table: str, columns: Sequence[tuple[str, npt.ArrayLike, str]]) -> int:
     """Insert rows of the model table ``tgsis.<table>`` stored in chunks: one call of ``tgsis.insert_chunk_rows``.
 
-    ``columns``: ``(name, values (n,), wire type)``, every column of the row table once, bigint (``int8``) or
-    double precision (``float8``); sent in binary (the doubles bit for bit). Returns the chunks written.
+    ``columns``: ``(name, values (n,), wire type)``, integer (``int8``, ``int4``, ``int2``: sent as bigint and cast
+    by the server), double precision (``float8``) or boolean (``bool``), every column of the row table once but those that may be NULL (then NULL, as a COPY leaves them);
+    sent in binary (the doubles bit for bit). Returns the chunks written.
 
     Raises
     ------
@@ -458,24 +459,33 @@ def delete_chunk_rows(conn: Conn, table: str, keys: Sequence[tuple[str, npt.Arra
 
 
 def _chunk_rows_call(conn: Conn, function: str, table: str, columns: Sequence[tuple[str, npt.ArrayLike, str]]) -> int:
-    """``tgsis.<function>(table, names, ints, floats)``: the bigint columns then the double ones, as (columns x rows)."""
-    ints = [(n, np.asarray(v, dtype=np.int64)) for n, v, w in columns if w == "int8"]
+    """``tgsis.<function>(table, names, ints, floats[, bools])``: the integer, double and boolean columns, as (columns x rows).
+
+    The boolean array is sent only when there are boolean columns (``tgsis.insert_chunk_rows`` takes it, a
+    G-map dart's ``positive``; ``tgsis.delete_chunk_rows``' keys have none).
+    """
+    ints = [(n, np.asarray(v, dtype=np.int64)) for n, v, w in columns if w in ("int8", "int4", "int2")]
     floats = [(n, np.asarray(v, dtype=np.float64)) for n, v, w in columns if w == "float8"]
-    if len(ints) + len(floats) != len(columns):
+    bools = [(n, np.asarray(v, dtype=np.bool_)) for n, v, w in columns if w == "bool"]
+    if len(ints) + len(floats) + len(bools) != len(columns):
         raise InvalidInputError(
-            f"tgsis.{table}: rows stored in chunks are written as bigint and double precision columns only",
+            f"tgsis.{table}: rows stored in chunks are written as integer, double precision and boolean columns only",
             detail=f"columns {[(n, w) for n, _, w in columns]}",
         )
     count = len(ints[0][1]) if ints else 0
     int_rows = np.stack([v for _, v in ints]) if ints else np.empty((0, count), dtype=np.int64)
     float_rows = np.stack([v for _, v in floats]) if floats else None
+    bool_rows = np.stack([v for _, v in bools]) if bools else None
     row = conn.execute(
-        sql.SQL("SELECT tgsis.{}(%s, %s::text[], %b::bigint[], %b::float8[])").format(sql.Identifier(function)),
+        sql.SQL("SELECT tgsis.{}(%s, %s::text[], %b::bigint[], %b::float8[]{})").format(
+            sql.Identifier(function), sql.SQL(", %b::boolean[]" if bools else "")
+        ),
         (
             table,
-            [n for n, _ in (*ints, *floats)],
+            [n for n, _ in (*ints, *floats, *bools)],
             int_rows.tolist(),
             float_rows.tolist() if float_rows is not None and count else None,
+            *([bool_rows.tolist() if bool_rows is not None and count else None] if bools else []),
         ),
     ).fetchone()
     return int(row[0]) if row is not None else 0
