@@ -217,13 +217,14 @@ def merge_storage_state(conn: Conn) -> dict[str, list[Any]]:
     return state
 
 
-def rewrites_same_values(conn: Conn) -> bool:
-    """Whether an ``UPDATE`` writing a row's own values back writes a new version of it (the object changed).
+def rewrites_same_values(conn: Conn, table: str = "vrtx") -> bool:
+    """Whether an ``UPDATE`` of model table ``tgsis.<table>`` writing a row's own values back writes a new version
+    of it (the object changed).
 
     Rows: yes. Chunks: no, a chunk whose content is unchanged bit for bit is not written (docs/storage.md,
     "What differs from rows").
     """
-    return not in_chunks(conn)
+    return not in_chunks(conn, table)
 
 
 def stored_unit(conn: Conn, schema: str, table: str) -> Callable[[tuple[str, ...]], tuple[str, ...]]:

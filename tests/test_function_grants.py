@@ -46,6 +46,7 @@ _NAMED_IN_DOCS = frozenset(
         "checked_time",
         "checkout_revision",
         "chunk_array_missing",
+        "chunk_object_extent",
         "chunk_snapshot_guard",
         "claim_unversioned_geoid",
         "class_denied_geoids",
