@@ -95,17 +95,20 @@ def _store_all(conn: Conn) -> list[int]:
     return [G.insert_gmap(conn, fc, g, **kw) for fc, g, kw in _maps()]
 
 
-@pytest.mark.parametrize("versioned", [False, True])
+@pytest.mark.parametrize("versioned", ["no", "DEFAULT", "child"])
 def test_the_client_upload_writes_the_server_paths_chunks_bit_for_bit(
-    conn: Conn, monkeypatch: pytest.MonkeyPatch, versioned: bool
+    conn: Conn, monkeypatch: pytest.MonkeyPatch, versioned: str
 ) -> None:
     _gmap_class(conn)
     _md_class(conn)
     F.create_feature_class(conn, "plain", "GMAP", time_model="GMAP", cell_level=2)  # no cell property
     F.create_feature_class(conn, "flat", "GMAP", time_model="MULTIDIM", cell_level=2)
-    if versioned:
+    if versioned != "no":
         tgsis.enable_feature_versioning(conn)
     _switch(conn, "chunks")
+    if versioned == "child":  # written in the child's working revision, as the server path writes them
+        tgsis.create_version(conn, "e1")
+        tgsis.goto_version(conn, "e1")
 
     def refused(*args: Any) -> int:
         raise AssertionError(f"tgsis.insert_chunk_rows called: {args[1]}")
@@ -126,7 +129,11 @@ def test_the_client_upload_writes_the_server_paths_chunks_bit_for_bit(
     assert conn.execute(
         "SELECT count(*) FROM tgsis.gmap_dart WHERE geoid = %s AND positive IS NULL", (client[2],)
     ).fetchone() == (48,)
-    if versioned:  # noted as changed in the working revision, as the server path notes them
+    if versioned == "child":
+        revisions = " UNION ".join(f"SELECT revision FROM tgsis.{t}_chunk WHERE geoid = ANY (%(g)s)" for t in TABLES)
+        working = "SELECT workingrevision FROM tgsis.versions WHERE name = 'e1'"
+        assert conn.execute(revisions, {"g": client}).fetchall() == conn.execute(working).fetchall()
+    if versioned != "no":  # noted as changed in the working revision, as the server path notes them
         noted = "SELECT count(*) FROM tgsis.revision_objects WHERE tablename = ANY (%s) AND objectkey = ANY (%s)"
         tables = list(TABLES)
         assert (
