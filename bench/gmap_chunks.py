@@ -32,7 +32,6 @@ from psycopg import sql
 from timing import bench_database, timed
 
 from tgsis import gmaps
-from tgsis.db import _chunk_transfer
 from tgsis.db import features as F
 from tgsis.db import gmaps as G
 
@@ -133,12 +132,12 @@ def main() -> None:
                 **{f"bytes_{t}": float(size[t]) for t in TABLES},
             }
             if storage == "chunks":  # the server's set-based path (the client's upload declining), for the ratio
-                client_upload = _chunk_transfer.upload_rows
-                _chunk_transfer.upload_rows = lambda *args: False  # type: ignore[assignment]
+                client_upload = G.upload_rows  # (insert_gmap's name for it)
+                G.upload_rows = lambda *args: False  # type: ignore[assignment]
                 try:
                     results[storage]["store_server_path"] = timed(store, args.repeat, empty)
                 finally:
-                    _chunk_transfer.upload_rows = client_upload  # type: ignore[method-assign]
+                    G.upload_rows = client_upload
             if storage == "chunks":  # every dart in one chunk per 1024 ids (and per level)
                 chunks = conn.execute("SELECT count(*) FROM tgsis.gmap_alpha_chunk").fetchone()
                 print(f"gmap_alpha_chunk rows: {chunks[0] if chunks else 0}")  # type: ignore[index]

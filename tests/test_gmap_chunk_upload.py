@@ -29,7 +29,7 @@ from tests.test_gmap_multidim import _interpretations
 from tests.test_gmap_storage import _class as _gmap_class
 from tests.test_gmap_storage import _evolving
 from tgsis import gmaps
-from tgsis.db import _chunk_transfer, _transfer
+from tgsis.db import _chunk_transfer, _transfer, multidim
 from tgsis.db import features as F
 from tgsis.db import gmaps as G
 from tgsis.db._gmap_common import orientation_signs
@@ -118,7 +118,8 @@ def test_the_client_upload_writes_the_server_paths_chunks_bit_for_bit(
         client = _store_all(conn)
         conn.commit()
     with monkeypatch.context() as m:  # the server's path: the upload declines
-        m.setattr(_chunk_transfer, "upload_rows", lambda *args: False)
+        m.setattr(G, "upload_rows", lambda *args: False)  # (insert_gmap's name for it)
+        m.setattr(multidim, "upload_rows", lambda *args: False)  # (insert_md_gmap's)
         server = _store_all(conn)
         conn.commit()
     mine, theirs = _chunk_rows(conn, client), _chunk_rows(conn, server)
