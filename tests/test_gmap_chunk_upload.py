@@ -199,6 +199,25 @@ def test_bad_uploads_are_refused_and_a_second_one_declines(conn: Conn) -> None:
         storage.copy(conn, "tgsis", "gmap_dart", again)
     conn.rollback()
     assert _chunk_rows(conn, [geoid]) == before
+    # a negative level: declined, so that the server's path applies the row table's CHECK (level >= 0)
+    alpha = [
+        ("geoid", np.full(2, geoid + 1000), "int8"),
+        ("level", np.array([-1, -1], dtype=np.int16), "int2"),
+        ("dartid", np.array([0, 1]), "int8"),
+        ("dartid2", np.array([1, 0]), "int8"),
+    ]
+    assert _chunk_transfer.upload_rows(conn, "gmap_alpha", alpha, storage) is False
+    with pytest.raises(psycopg.errors.CheckViolation):
+        storage.copy(conn, "tgsis", "gmap_alpha", alpha)
+    conn.rollback()
+    with pytest.raises(InvalidInputError, match="are integers"):
+        _chunk_transfer.upload_rows(
+            conn, "gmap_alpha", [(n, v * 1.0, w) if n == "level" else (n, v, w) for n, v, w in alpha], storage
+        )
+    conn.rollback()
+    assert conn.execute("SELECT count(*) FROM tgsis.gmap_alpha_chunk WHERE geoid = %s", (geoid + 1000,)).fetchone() == (
+        0,
+    )
 
 
 @pytest.mark.parametrize("versioned", [False, True])

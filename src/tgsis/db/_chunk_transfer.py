@@ -1025,13 +1025,15 @@ def upload_rows(conn: Conn, table: str, columns: Sequence[tuple[str, npt.ArrayLi
     -------
     bool
         False, with nothing written, when the chunk table holds chunks of one of these objects already (in any
-        version or revision), or the role may not read the chunk table (granted the face alone): the caller then writes through ``tgsis.insert_chunk_rows`` (:meth:`Storage.copy`),
+        version or revision), or the role may not read the chunk table (granted the face alone), or a key is
+        negative (a ``level``: the row table's CHECK, which the server's path applies): the caller then writes through ``tgsis.insert_chunk_rows`` (:meth:`Storage.copy`),
         which answers as the rows would.
 
     Raises
     ------
     InvalidInputError
-        Columns that are not the table's, or values the codec refuses (nothing is sent).
+        Columns that are not the table's, keys that are not integers, or values the codec refuses (nothing is
+        sent).
     NotVersionedError, ReadOnlyRevisionError
         The session may not write here.
     psycopg.errors.InsufficientPrivilege
@@ -1058,6 +1060,13 @@ def upload_rows(conn: Conn, table: str, columns: Sequence[tuple[str, npt.ArrayLi
             f"tgsis.{table}: every column of an upload has one value per row ({count})",
             detail=f"shapes {[(n, v.shape) for n, v in given.items()]}",
         )
+    if any(given[k].size and given[k].dtype.kind not in "iu" for k in keys):
+        raise InvalidInputError(
+            f"tgsis.{table}: the key columns {list(keys)} of an upload are integers",
+            detail=f"types {[(k, str(given[k].dtype)) for k in keys]}",
+        )
+    if any(given[k].size and int(given[k].min()) < 0 for k in keys):
+        return False  # the row table's CHECK (level >= 0), which the server's path applies (23514)
     storage.check("tgsis", table)
     revision = int(storage.revision or 0) if ("tgsis", table) in storage.versioned else 0
     # the groups of rows by their keys before chunk (an object's darts; an object's involution of one level)
