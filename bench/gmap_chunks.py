@@ -5,8 +5,11 @@ A block of ``--cubes``^3 unit cubes, 6 tetrahedra each, as a 3-G-map
 involution rows), stored static with a cell per volume. In one process, on
 one throwaway cluster: first with ``tgsis.gmap_dart`` and ``gmap_alpha`` as
 rows, then emptied and switched to chunks (``tgsis.store_in_chunks``) and
-stored again (the client's rows go through ``tgsis.insert_chunk_rows``, the
-set-based row path: no client-side chunk encoding for G-maps yet). Bytes are
+stored again: the client encodes the chunks in numpy and sends them in one
+binary COPY per table (``tgsis.db._chunk_transfer.upload_rows``); then,
+still on chunks, stored with that upload declining, so that the rows go
+through ``tgsis.insert_chunk_rows`` (the server's set-based path, what the
+client did before plan K; ``store_server_path``). Bytes are
 ``pg_total_relation_size`` (heap, TOAST, indexes) of the two tables' storage
 (``tgsis.storage_table``), emptied by TRUNCATE after the timed runs, holding
 the map stored once more, after a VACUUM, divided by the darts; the points,
@@ -128,6 +131,13 @@ def main() -> None:
                 "check": t_check,
                 **{f"bytes_{t}": float(size[t]) for t in TABLES},
             }
+            if storage == "chunks":  # the server's set-based path (the client's upload declining), for the ratio
+                client_upload = G.upload_rows  # (insert_gmap's name for it)
+                G.upload_rows = lambda *args: False  # type: ignore[assignment]
+                try:
+                    results[storage]["store_server_path"] = timed(store, args.repeat, empty)
+                finally:
+                    G.upload_rows = client_upload
             if storage == "chunks":  # every dart in one chunk per 1024 ids (and per level)
                 chunks = conn.execute("SELECT count(*) FROM tgsis.gmap_alpha_chunk").fetchone()
                 print(f"gmap_alpha_chunk rows: {chunks[0] if chunks else 0}")  # type: ignore[index]
@@ -150,6 +160,8 @@ def main() -> None:
     print(f"chunks_alpha_bytes_per_dart: {chunks['bytes_gmap_alpha'] / darts:.1f}")
     print(f"store_rows_s: {rows['store']:.3f}")
     print(f"store_chunks_vs_rows: {chunks['store'] / rows['store']:.2f}")
+    print(f"store_chunks_server_path_vs_rows: {chunks['store_server_path'] / rows['store']:.2f}")
+    print(f"store_chunks_client_vs_server_path: {chunks['store'] / chunks['store_server_path']:.3f}")
     print(f"fetch_chunks_vs_rows: {chunks['fetch'] / rows['fetch']:.2f}")
     print(f"gmap_check_chunks_vs_rows: {chunks['check'] / rows['check']:.2f}")
     assert np.isfinite(both["chunks"])

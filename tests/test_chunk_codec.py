@@ -460,3 +460,19 @@ def test_an_instant_key_is_written_bit_for_bit_after_the_object_key() -> None:
         to_copy(chunks, 7, 5)
     with pytest.raises(InvalidInputError):
         ChunkColumns(("x", "times"), instant=("times",))
+
+
+def test_an_integer_key_is_written_in_its_width_and_refused_out_of_range() -> None:
+    """A G-map's involutions are keyed (geoid, level smallint, chunk): the COPY carries a 2-byte level."""
+    spec = ChunkColumns(("dartid2",), refs=("dartid2",), instant=("level",), instant_kinds=("int2",))
+    chunks = encode(np.arange(3), {"dartid2": np.array([1, 0, 2])}, spec)
+    stream = to_copy(chunks, 7, 5, (3,))
+    assert stream[21:33] == (8).to_bytes(4, "big") + (7).to_bytes(8, "big")
+    assert stream[33:39] == (2).to_bytes(4, "big") + (3).to_bytes(2, "big")  # level 3 as smallint
+    assert stream[39:51] == (8).to_bytes(4, "big") + (0).to_bytes(8, "big")  # chunk 0
+    for value in (2**15, -(2**15) - 1):
+        with pytest.raises(InvalidInputError, match="out of the range of int2"):
+            to_copy(chunks, 7, 5, (value,))
+    for kinds in [("int2", "int2"), ("text",)]:  # one kind per key, of the kinds a key may have
+        with pytest.raises(InvalidInputError, match="kinds"):
+            ChunkColumns(("dartid2",), refs=("dartid2",), instant=("level",), instant_kinds=kinds)

@@ -69,6 +69,8 @@ PROPERTY_KINDS: dict[str, Any] = {
     "bool": np.bool_,
 }
 _INT4_MIN, _INT4_MAX = -(2**31), 2**31 - 1
+#: the types a key column between the object key and ``chunk`` may have (:attr:`ChunkColumns.instant_kinds`)
+_KEY_KINDS = ("float8", "int2", "int4", "int8")
 
 IntArray = npt.NDArray[np.int64]
 BoolArray = npt.NDArray[np.bool_]
@@ -96,8 +98,12 @@ class ChunkColumns:
     key : str
         The chunk table's object key column (``geoid``; ``_geoid`` for a class's property table).
     instant : tuple of str
-        The ``double precision`` key columns after ``key`` (``("times",)`` for model 2's time tables, keyed
-        ``(geoid, times, chunk)``); empty for the tables keyed by the object alone.
+        The key columns after ``key`` (``("times",)`` for model 2's time tables, keyed ``(geoid, times, chunk)``;
+        ``("level",)`` for a G-map's involutions, keyed ``(geoid, level, chunk)``); empty for the tables keyed by
+        the object alone.
+    instant_kinds : tuple of str
+        The type of each of ``instant`` (``float8``, the default when empty, or ``int2``, ``int4``, ``int8``):
+        how :func:`to_copy` writes its value.
     """
 
     names: tuple[str, ...]
@@ -106,9 +112,17 @@ class ChunkColumns:
     properties: tuple[tuple[str, str], ...] = ()
     key: str = "geoid"
     instant: tuple[str, ...] = ()
+    instant_kinds: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         kinds = dict(self.properties)
+        if (self.instant_kinds and len(self.instant_kinds) != len(self.instant)) or any(
+            k not in _KEY_KINDS for k in self.instant_kinds
+        ):
+            raise InvalidInputError(
+                f"chunk keys {list(self.instant)}: kinds {list(self.instant_kinds)} must be one per key, of "
+                f"{list(_KEY_KINDS)}"
+            )
         unknown = [c for c in (*self.refs, *self.integers, *kinds) if c not in self.names]
         if (
             unknown
@@ -521,14 +535,15 @@ def to_copy(chunks: ChunkSet, geoid: int, revision: int = 0, instant: tuple[floa
         The object's key.
     revision : int
         The revision that writes these chunks (0 for unversioned storage).
-    instant : tuple of float
-        The values of the ``double precision`` key columns (:attr:`ChunkColumns.instant`), one each, written bit
-        for bit (``-0.0`` stays ``-0.0``).
+    instant : tuple of float or int
+        The values of the key columns after the object's (:attr:`ChunkColumns.instant`), one each: a ``double
+        precision`` one written bit for bit (``-0.0`` stays ``-0.0``), an integer one (``instant_kinds``) in its
+        width.
 
     Raises
     ------
     InvalidInputError
-        ``instant`` does not give one value per instant key column.
+        ``instant`` does not give one value per instant key column, or an integer key's value is out of its range.
 
     Returns
     -------
@@ -542,14 +557,22 @@ def to_copy(chunks: ChunkSet, geoid: int, revision: int = 0, instant: tuple[floa
     c = len(chunks.chunk)
     offsets = chunks.offsets
     n_fields = len(spec.copy_columns())
-    times = [(f"lt{i}", ">i4") for i in range(len(instant))], [(f"t{i}", ">f8") for i in range(len(instant))]
+    key_kinds = spec.instant_kinds or ("float8",) * len(spec.instant)
+    for value, kind in zip(instant, key_kinds):
+        if kind != "float8" and not np.iinfo(_BIG_ENDIAN[kind]).min <= int(value) <= np.iinfo(_BIG_ENDIAN[kind]).max:
+            raise InvalidInputError(f"chunk key value {value!r} is out of the range of {kind}")
+    times = (
+        [(f"lt{i}", ">i4") for i in range(len(instant))],
+        [(f"t{i}", _BIG_ENDIAN[kind]) for i, kind in enumerate(key_kinds)],
+    )
     layout = [("nf", ">i2"), ("lg", ">i4"), ("g", ">i8")]
     layout += [field for pair in zip(*times) for field in pair]
     layout += [("lc", ">i4"), ("c", ">i8"), ("lr", ">i4"), ("r", ">i4")]
     head = np.empty(c, dtype=layout)
     head["nf"], head["lg"], head["g"], head["lc"], head["c"] = n_fields, 8, geoid, 8, chunks.chunk
-    for i, value in enumerate(instant):
-        head[f"lt{i}"], head[f"t{i}"] = 8, value  # float64 into >f8: the bits kept
+    for i, (value, kind) in enumerate(zip(instant, key_kinds)):
+        # float64 into >f8: the bits kept; an integer in its width
+        head[f"lt{i}"], head[f"t{i}"] = np.dtype(_BIG_ENDIAN[kind]).itemsize, value
     head["lr"], head["r"] = 4, revision
     heads = head.view(np.uint8).reshape(c, -1) if c else np.empty((0, head.itemsize), dtype=np.uint8)
 

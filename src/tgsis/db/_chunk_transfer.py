@@ -64,6 +64,7 @@ __all__ = [
     "repeated_corners",
     "upload_instants",
     "write_instants",
+    "upload_rows",
     "INSTANT_BLOCK_BITS",
 ]
 
@@ -149,7 +150,7 @@ def chunked_tables(conn: Conn) -> frozenset[str]:
     return frozenset(str(r[0]) for r in rows)
 
 
-def chunk_table(conn: Conn, table: str, *, instants: bool = False) -> ChunkTable:
+def chunk_table(conn: Conn, table: str, *, instants: bool = False, values: bool = False) -> ChunkTable:
     """The chunk table of ``tgsis.<table>``, read from the catalog (any role may read it).
 
     Parameters
@@ -159,6 +160,11 @@ def chunk_table(conn: Conn, table: str, *, instants: bool = False) -> ChunkTable
         precision`` columns (model 2's ``times_vrtx``, ``times_trgl``: ``times``; model 3's ``d4dvrtx``:
         ``timem, timet``, ``d4dtrgl``: ``timem``; :func:`instant_rows`, :func:`upload_instants`) instead of
         model 1's ``geoid, chunk``. They are read from the catalog (the row table's primary key less its id).
+    values : bool
+        Expect a G-map's darts or involutions (``gmap_dart``, ``md_dart``, ``gmap_alpha``, ``md_alpha``:
+        :func:`upload_rows`): key ``geoid, [integer keys,] chunk`` (``level smallint``), its ref columns the
+        ``integer[]`` ones with a ``<name>_wide``, and its ``value`` columns (``smallint[]``, ``integer[]``,
+        ``bigint[]``, ``real[]``, ``boolean[]``: a dart's ``acellid``, ``positive``) as nullable columns.
 
     Raises
     ------
@@ -192,23 +198,41 @@ def chunk_table(conn: Conn, table: str, *, instants: bool = False) -> ChunkTable
     names = [name for name, _ in attributes]
     keys = names[: names.index("revision")] if "revision" in names else names
     arrays = [(n, t) for n, t in attributes if n not in keys and n not in _FIXED and not n.endswith("_wide")]
-    refs = tuple(n for n, t in arrays if t == "integer[]")
+    if values:  # a ref column has its _wide; a value column of type integer[] has none
+        refs = tuple(n for n, t in arrays if t == "integer[]" and f"{n}_wide" in names)
+    else:
+        refs = tuple(n for n, t in arrays if t == "integer[]")
     types = dict(attributes)
-    instant = tuple(keys[1:-1]) if instants else ()
+    instant = tuple(keys[1:-1]) if instants or values else ()
+    key_types = ("smallint", "integer", "bigint") if values else ("double precision",)
+    kinds = {n: _VALUE_KINDS.get(t) for n, t in arrays if values and n not in refs and t != "double precision[]"}
     if (
         keys != ["geoid", *instant, "chunk"]
         or (instants and not instant)
-        or any(types[k] != "double precision" for k in instant)
+        or any(types[k] not in key_types for k in instant)
         or size != CHUNK_SIZE
-        or any(t not in ("integer[]", "double precision[]") for _, t in arrays)
+        or any(t not in ("integer[]", "double precision[]") for n, t in arrays if n not in kinds)
+        or None in kinds.values()
     ):
+        what = "time" if instants else "G-map" if values else "model-1"
         raise InvalidInputError(
-            f"tgsis.{table}_chunk is not a {'time' if instants else 'model-1'} chunk table of {CHUNK_SIZE} ids "
-            "per chunk",
+            f"tgsis.{table}_chunk is not a {what} chunk table of {CHUNK_SIZE} ids per chunk",
             detail=f"key {keys}, chunk size {size}, arrays {arrays}",
         )
-    spec = ChunkColumns(tuple(n for n, _ in arrays), refs=refs, instant=instant)
+    spec = ChunkColumns(
+        tuple(n for n, _ in arrays),
+        refs=refs,
+        properties=tuple((n, str(k)) for n, k in kinds.items()),
+        instant=instant,
+        instant_kinds=tuple(_KEY_KINDS[types[k]] for k in instant) if values else (),
+    )
     return ChunkTable(table, spec, bool(versioned), bool(readable))
+
+
+#: the element kind (:data:`tgsis._chunks.PROPERTY_KINDS`) of a G-map chunk table's value column, by its type
+_VALUE_KINDS = {"smallint[]": "int2", "integer[]": "int4", "bigint[]": "int8", "real[]": "float4", "boolean[]": "bool"}
+#: the kind of an integer key column between ``geoid`` and ``chunk`` (a G-map involution's ``level``)
+_KEY_KINDS = {"smallint": "int2", "integer": "int4", "bigint": "int8"}
 
 
 def upload_chunks(conn: Conn, table: str, objects: Sequence[ObjectRows], storage: Storage | None = None) -> int:
@@ -974,3 +998,114 @@ def write_instants(
             *((name, values, "float8" if values.dtype.kind == "f" else "int8") for name, values in columns.items()),
         ],
     )
+
+
+def upload_rows(conn: Conn, table: str, columns: Sequence[tuple[str, npt.ArrayLike, str]], storage: Storage) -> bool:
+    """Write a new G-map's darts or involutions as chunk rows encoded here: one binary COPY (issue 40, plan K G2).
+
+    The upload of ``insert_gmap`` / ``insert_md_gmap`` into ``gmap_dart``, ``md_dart``, ``gmap_alpha`` or
+    ``md_alpha`` stored in chunks (:meth:`Storage.copy_all`), as model 1's :func:`upload_chunks` and models 2
+    and 3's :func:`upload_instants`: the rows are grouped by their keys before ``chunk`` (``geoid``, and
+    ``level`` for the involutions), each group's chunks encoded by numpy (:func:`~tgsis._chunks.encode`: the
+    point or image a ref column relative to the chunk's smallest, ``acellid`` and ``positive`` arrays that may
+    hold NULL) and COPied in binary into ``tgsis.<table>_chunk`` in the session's working revision (0 for
+    unversioned storage and features of classes without versioning) as the role: the chunk table's grants and
+    row-level security (the class's right), its insert trigger (the encoding, and revision 0 when
+    unversioned); after the checks ``tgsis.insert_chunk_rows`` makes: not locked by another version (TG303),
+    the object's write lock taken. The objects are noted as changed in the working revision.
+
+    Parameters
+    ----------
+    columns : sequence of (str, (n,) array_like, str)
+        ``(name, values, wire type)`` as :meth:`Storage.copy` takes them: every column of the row table once
+        (the key columns, the id column, the arrays), those that may be NULL (``acellid``, ``positive``) left
+        out when NULL in every row.
+
+    Returns
+    -------
+    bool
+        False, with nothing written, when the chunk table holds chunks of one of these objects already (in any
+        version or revision), or the role may not read the chunk table (granted the face alone), or a key is
+        negative (a ``level``: the row table's CHECK, which the server's path applies): the caller then writes through ``tgsis.insert_chunk_rows`` (:meth:`Storage.copy`),
+        which answers as the rows would.
+
+    Raises
+    ------
+    InvalidInputError
+        Columns that are not the table's, keys that are not integers, or values the codec refuses (nothing is
+        sent).
+    NotVersionedError, ReadOnlyRevisionError
+        The session may not write here.
+    psycopg.errors.InsufficientPrivilege
+        The role lacks INSERT on the chunk table, or the class's right.
+    """
+    layout = chunk_table(conn, table, values=True)
+    if not layout.readable:  # a role granted the face alone: the server's path, which answers as the rows
+        return False
+    spec = layout.columns
+    given = {name: np.asarray(values) for name, values, _ in columns}
+    keys = ("geoid", *spec.instant)
+    extra = [n for n in given if n not in keys and n not in spec.names]
+    missing = [n for n in (*keys, *spec.names) if n not in given and not spec.nullable(n)]
+    if len(given) != len(columns) or len(extra) != 1 or missing:
+        raise InvalidInputError(
+            f"tgsis.{table}: an upload gives the keys {list(keys)}, one id column and the columns "
+            f"{list(spec.names)} once each (those that may be NULL may be left out)",
+            detail=f"given {[name for name, _, _ in columns]}",
+        )
+    ids = given[extra[0]]
+    count = len(ids)
+    if any(v.shape != (count,) for v in given.values()):
+        raise InvalidInputError(
+            f"tgsis.{table}: every column of an upload has one value per row ({count})",
+            detail=f"shapes {[(n, v.shape) for n, v in given.items()]}",
+        )
+    if any(given[k].size and given[k].dtype.kind not in "iu" for k in keys):
+        raise InvalidInputError(
+            f"tgsis.{table}: the key columns {list(keys)} of an upload are integers",
+            detail=f"types {[(k, str(given[k].dtype)) for k in keys]}",
+        )
+    if any(given[k].size and int(given[k].min()) < 0 for k in keys):
+        return False  # the row table's CHECK (level >= 0), which the server's path applies (23514)
+    storage.check("tgsis", table)
+    revision = int(storage.revision or 0) if ("tgsis", table) in storage.versioned else 0
+    # the groups of rows by their keys before chunk (an object's darts; an object's involution of one level)
+    stacked = np.stack([given[k].astype(np.int64) for k in keys], axis=1)
+    groups, inverse, sizes = np.unique(stacked, axis=0, return_inverse=True, return_counts=True)
+    order = np.argsort(inverse.reshape(-1), kind="stable")
+    bounds = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    encoded = []  # encode first: bad input is refused before anything is sent
+    for g in range(len(groups)):
+        rows = order[bounds[g] : bounds[g + 1]]
+        values: dict[str, npt.NDArray[Any]] = {}
+        nulls: dict[str, npt.NDArray[np.bool_]] = {}
+        for name in spec.names:
+            if name in given:
+                values[name] = given[name][rows]
+            else:  # left out: NULL in every row, as a COPY leaves it
+                values[name] = np.zeros(len(rows), dtype=spec.dtype(name))
+                nulls[name] = np.ones(len(rows), dtype=bool)
+        encoded.append((encode(ids[rows], values, spec, nulls), tuple(int(v) for v in groups[g])))
+    if not encoded:
+        return True
+    objects = [str(g) for g in sorted({key[0] for _, key in encoded})]
+    if ("tgsis", table) in storage.versioned:
+        conn.execute("SELECT tgsis.check_objects_unlocked('feature', %s::text[])", (objects,))  # TG303
+    conn.execute("SELECT tgsis.object_write_lock('feature', %s::text[])", (objects,))  # no face writer in flight
+    existing = conn.execute(
+        sql.SQL("SELECT EXISTS (SELECT FROM {} WHERE geoid = ANY (%s::int8[]))").format(layout.relation),
+        ([int(g) for g in objects],),
+    ).fetchone()
+    if existing is None or existing[0]:
+        return False
+    copy_columns = spec.copy_columns()
+    statement = sql.SQL("COPY {} ({}) FROM STDIN (FORMAT binary)")
+    with staged(conn, layout.relation, copy_columns) as into:
+        with conn.cursor().copy(statement.format(into, sql.SQL(", ").join(map(sql.Identifier, copy_columns)))) as copy:
+            for k, (chunks, key) in enumerate(encoded):
+                stream = to_copy(chunks, key[0], revision, key[1:])
+                # one stream: the header once, the trailer once
+                copy.write(memoryview(stream)[19 if k else 0 : -2 if k < len(encoded) - 1 else None])
+    if layout.versioned and revision != 0:
+        conn.execute("SELECT tgsis.record_changed_objects('tgsis', %s, %s::text[])", (table, objects))
+    return True

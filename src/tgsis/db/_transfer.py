@@ -660,8 +660,18 @@ class Storage:
             return
         copy_in(conn, *self._prepared(schema, table, columns))
 
-    def copy_all(self, conn: Conn, tables: Sequence[tuple[str, str, Callable[[], Columns]]]) -> None:
+    def copy_all(
+        self,
+        conn: Conn,
+        tables: Sequence[tuple[str, str, Callable[[], Columns]]],
+        upload: Callable[[str, Columns], bool] | None = None,
+    ) -> None:
         """COPY several tables in turn, the client's work overlapping the server's.
+
+        ``upload(table, columns)``, when given, writes the columns of a model table stored in chunks
+        (:attr:`chunked`) itself (the G-map uploads: chunks encoded by the client,
+        ``tgsis.db._chunk_transfer.upload_rows``) and returns whether it did; where it did not, or without it,
+        they go through :meth:`copy` (``tgsis.insert_chunk_rows``).
 
         ``tables``: ``(schema, table, columns)`` where ``columns()`` gives the
         ``(name, values, wire type)`` columns. The callables start at once and
@@ -679,7 +689,8 @@ class Storage:
             try:
                 for (schema, table, _), future in zip(tables, made):
                     if (schema, table) in self.chunked:
-                        self.copy(conn, schema, table, future.result())
+                        if upload is None or not upload(table, future.result()):
+                            self.copy(conn, schema, table, future.result())
                         continue
                     target, columns = self._target(schema, table, future.result())
                     chunks = encode_chunks([(values, wire) for _, values, wire in columns])

@@ -31,6 +31,7 @@ from psycopg import sql
 from tgsis import datamodels
 from tgsis._series import check_time
 from tgsis.arguments import checked, no_nul
+from tgsis.db._chunk_transfer import upload_rows
 from tgsis.db._continuity import check_continuity, checked_tolerance
 from tgsis.db._gmap_common import (
     Conn,
@@ -302,7 +303,8 @@ def insert_gmap(
             tables.append(("tgsis", "gmap_cell", cell_rows))
             if fc.cell_properties:
                 tables.append((fc.schema, fc.cellprotable, value_rows))
-        storage.copy_all(conn, tables)
+        # the darts and involutions of tables stored in chunks: encoded here, one binary COPY each
+        storage.copy_all(conn, tables, lambda table, columns: upload_rows(conn, table, columns, storage))
         if len(periods) > 1:
             check_continuity(conn, geoid, tolerance)
         insert_feature_row(conn, fc, geoid, properties)

@@ -23,6 +23,7 @@ from psycopg import sql
 
 from tgsis import datamodels
 from tgsis.arguments import checked, no_nul
+from tgsis.db._chunk_transfer import upload_rows
 from tgsis.db._cube import cube_name
 from tgsis.db._gmap_common import (
     Conn,
@@ -191,7 +192,8 @@ def insert_md(
             tables.append(("tgsis", "md_cell", cell_rows))
             if fc.cell_properties:
                 tables.append((fc.schema, fc.cellprotable, value_rows))
-        storage.copy_all(conn, tables)
+        # the darts and involutions of tables stored in chunks: encoded here, one binary COPY each
+        storage.copy_all(conn, tables, lambda table, columns: upload_rows(conn, table, columns, storage))
         insert_feature_row(conn, fc, geoid, properties)
     return geoid
 
