@@ -199,7 +199,13 @@ def test_store_class_in_chunks_face_and_python_paths_and_back(conn: Conn) -> Non
     assert got[0][0] == "{-0,NaN,2}" and got[1][1] == [8, 99] and got[2][1:] == ([4, 5], [6.0, 7.0, 8.0])
     assert [now[i] for i in range(20, 100)] == [b for b in before if 20 <= b[1] < 100]
     # the Python paths through the face: a new feature fetched back bit for bit, then deleted
+    conn.execute("SET track_functions = 'all'")
     other = F.insert_feature(conn, "layer", mesh)
+    # set-based (tgsis.write_property_rows: each chunk written once), not a face trigger per row
+    calls = conn.execute(
+        "SELECT coalesce(sum(calls), 0) FROM pg_stat_xact_user_functions WHERE funcname = 'chunk_face_write'"
+    ).fetchone()
+    assert calls == (0,)
     conn.commit()
     assert _same(F.fetch_feature(conn, "layer", other).mesh, mesh)
     assert F.delete_feature(conn, "layer", other)
