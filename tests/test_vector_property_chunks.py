@@ -250,6 +250,13 @@ def test_a_wrong_vector_is_refused_by_name_and_changes_nothing(conn: Conn) -> No
         ).fetchall()
         == chunk_bits
     )
+    # the client's chunk swap has no vector encoding: its server half refuses such a class by name
+    for call in (
+        "SELECT tgsis.object_chunks_stage('public.layer_cellpros')",
+        "SELECT tgsis.swap_object_chunks('public.layer_cellpros', 1, '{0}', '{x}')",
+    ):
+        state, message = sqlstate(conn, call)
+        assert state == "TG100" and "vector properties" in message and "normal, pair, rgb" in message, (call, message)
     # NOT NULL: a surface's vertices have every property
     assert sqlstate(conn, f"UPDATE {table} SET pair = NULL WHERE _geoid = %s AND _idx = 3", (geoid,))[0] == "TG100"
     conn.rollback()
@@ -495,3 +502,21 @@ def _insert_mesh(conn: Conn, name: str) -> tuple[int, Surface]:
     }
     mesh = Surface(surface.vertices, surface.cells, vertex_properties=props)
     return F.insert_feature(conn, name, mesh), mesh
+
+
+def test_more_values_a_slot_than_the_readers_unnest_is_refused_by_name(conn: Conn) -> None:
+    # 97 values a slot are stored (a vector counts its size); 98 are refused by name, nothing made
+    tgsis.create_feature_class(conn, "wide", "SURFACE", cell_properties=[("v", "real", 96), ("t", "real")])
+    tgsis.create_feature_class(conn, "wider", "SURFACE", cell_properties=[("v", "real", 97), ("t", "real")])
+    conn.execute(
+        "INSERT INTO public.wide_cellpros SELECT 1, i, array_fill(i::real, ARRAY[96]), 1 FROM generate_series(0, 9) i"
+    )
+    conn.commit()
+    assert conn.execute("SELECT tgsis.store_class_in_chunks('wide')").fetchone() == (1,)
+    assert conn.execute("SELECT v[96], t FROM public.wide_cellpros WHERE _idx = 9").fetchone() == (9.0, 1.0)
+    conn.execute("UPDATE public.wide_cellpros SET v[5] = -1 WHERE _idx = 9")
+    assert conn.execute("SELECT v[4:6] FROM public.wide_cellpros WHERE _idx = 9").fetchone() == ([9.0, -1.0, 9.0],)
+    conn.commit()
+    state, message = sqlstate(conn, "SELECT tgsis.store_class_in_chunks('wider')")
+    assert state == "TG100" and "more than 97 property values" in message, message
+    assert conn.execute("SELECT to_regclass('public.wider_cellpros_chunk')").fetchone() == (None,)
