@@ -505,18 +505,18 @@ def _insert_mesh(conn: Conn, name: str) -> tuple[int, Surface]:
 
 
 def test_more_values_a_slot_than_the_readers_unnest_is_refused_by_name(conn: Conn) -> None:
-    # 97 values a slot are stored (a vector counts its size); 98 are refused by name, nothing made
-    tgsis.create_feature_class(conn, "wide", "SURFACE", cell_properties=[("v", "real", 96), ("t", "real")])
-    tgsis.create_feature_class(conn, "wider", "SURFACE", cell_properties=[("v", "real", 97), ("t", "real")])
+    # 98 values a slot are stored (a vector counts its size); 99 are refused by name, nothing made
+    tgsis.create_feature_class(conn, "wide", "SURFACE", cell_properties=[("v", "real", 97), ("t", "real")])
+    tgsis.create_feature_class(conn, "wider", "SURFACE", cell_properties=[("v", "real", 98), ("t", "real")])
     conn.execute(
-        "INSERT INTO public.wide_cellpros SELECT 1, i, array_fill(i::real, ARRAY[96]), 1 FROM generate_series(0, 9) i"
+        "INSERT INTO public.wide_cellpros SELECT 1, i, array_fill(i::real, ARRAY[97]), 1 FROM generate_series(0, 9) i"
     )
     conn.commit()
     assert conn.execute("SELECT tgsis.store_class_in_chunks('wide')").fetchone() == (1,)
-    assert conn.execute("SELECT v[96], t FROM public.wide_cellpros WHERE _idx = 9").fetchone() == (9.0, 1.0)
+    assert conn.execute("SELECT v[97], t FROM public.wide_cellpros WHERE _idx = 9").fetchone() == (9.0, 1.0)
     conn.execute("UPDATE public.wide_cellpros SET v[5] = -1 WHERE _idx = 9")
     assert conn.execute("SELECT v[4:6] FROM public.wide_cellpros WHERE _idx = 9").fetchone() == ([9.0, -1.0, 9.0],)
     conn.commit()
     state, message = sqlstate(conn, "SELECT tgsis.store_class_in_chunks('wider')")
-    assert state == "TG100" and "more than 97 property values" in message, message
+    assert state == "TG100" and "more than 98 property values" in message, message
     assert conn.execute("SELECT to_regclass('public.wider_cellpros_chunk')").fetchone() == (None,)

@@ -151,13 +151,13 @@ BEGIN
         v_bad := 'no double precision nor vertex-id column (a model table''s slot is present where the first is not NULL)';
     END IF;
     -- the readers unnest a class's arrays side by side in one call (a vector as its k components) and the writer
-    -- with three more: PostgreSQL passes at most 100 arguments to a function (FUNC_MAX_ARGS)
+    -- with two more (slot, _delete): PostgreSQL passes at most 100 arguments to a function (FUNC_MAX_ARGS)
     IF v_class AND v_bad IS NULL
        AND (SELECT count(*) FILTER (WHERE NOT v_sizes ? a.attname) + coalesce(sum((v_sizes ->> a.attname)::integer), 0)
               FROM pg_attribute a
              WHERE a.attrelid = v_storage AND a.attnum > 0 AND NOT a.attisdropped
-               AND a.attname NOT IN ('revision', 'lastrevs', 'revclosed', v_reg.keycolumn, v_reg.chunkcolumn)) > 97 THEN
-        v_bad := 'more than 97 property values a slot (a vector counts its size): the chunk readers unnest them in one call';
+               AND a.attname NOT IN ('revision', 'lastrevs', 'revclosed', v_reg.keycolumn, v_reg.chunkcolumn)) > 98 THEN
+        v_bad := 'more than 98 property values a slot (a vector counts its size): the chunk readers unnest them in one call';
     END IF;
     IF v_bad IS NOT NULL
        OR NOT EXISTS (SELECT FROM pg_constraint con JOIN pg_attribute a ON a.attrelid = con.conrelid AND a.attnum = ANY (con.conkey)
