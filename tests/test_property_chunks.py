@@ -229,11 +229,7 @@ def test_verification_catches_a_changed_value_and_a_null_at_a_hole(conn: Conn) -
 
 
 def test_refusals_by_name(conn: Conn) -> None:
-    tgsis.create_feature_class(
-        conn, "vec", "SURFACE", cell_properties=[("normal", "double precision", 3), ("t", "real")]
-    )
-    state, message = sqlstate(conn, "SELECT tgsis.create_chunk_table('public.vec_cellpros')")
-    assert state == "TG100" and "vector properties" in message and "normal" in message
+    # (vector properties have a chunk form: tests/test_vector_property_chunks.py)
     _rock(conn)
     _make(conn)
     conn.execute("SELECT tgsis.rows_to_chunks(%s)", (ROCK,))
@@ -427,10 +423,7 @@ def test_what_is_not_built_is_refused_by_name_and_changes_nothing(conn: Conn) ->
     assert sqlstate(conn, "SELECT tgsis.store_class_in_chunks('nothere')")[0] == "TG200"
     tgsis.create_feature_class(conn, "series", "SURFACE", time_model="INSTANTS", cell_properties=[("t", "real")])
     assert sqlstate(conn, "SELECT tgsis.store_class_in_chunks('series')")[0] == "TG100"
-    tgsis.create_feature_class(conn, "vec", "SURFACE", cell_properties=[("normal", "double precision", 3)])
-    state, message = sqlstate(conn, "SELECT tgsis.store_class_in_chunks('vec')")
-    assert state == "TG100" and "normal" in message
-    assert conn.execute("SELECT to_regclass('public.vec_cellpros_chunk')").fetchone() == (None,)
+    # (a vector property is stored in chunks since plan K: tests/test_vector_property_chunks.py)
     tgsis.create_feature_class(conn, "bare", "SURFACE")  # no vertex or cell property: nothing to chunk
     state, message = sqlstate(conn, "SELECT tgsis.store_class_in_chunks('bare')")
     assert state == "TG100" and "no property column" in message

@@ -7,8 +7,9 @@
 -- transaction:
 -- 1. the ALTERs run on the row definition <table>_shape (it holds no rows),
 --    its new columns commented (tgsis.comment_property_columns); what the
---    chunks have no form for (a vector property, a reserved name, no property
---    left) is refused by name by tgsis.chunk_columns (TG100) before the chunk
+--    chunks have no form for (a reserved name, no property
+--    left; a vector property added or renamed: its size is in the catalog only
+--    after this call) is refused by name (TG100) before the chunk
 --    table changes; a change of a column's type is refused (TG100, not built).
 -- 2. the face and the chunk view <table>_chunk_rows are dropped, with this
 --    session's work tables of the face's writes; a user's view over the face,
@@ -64,8 +65,8 @@ BEGIN
                      WHERE a.attrelid = v_shape AND a.attnum > 0 AND NOT a.attisdropped LOOP
         v_cols := v_cols || jsonb_build_object(v_before.attnum::text, jsonb_build_array(v_before.attname, v_before.atttypid::oid));
     END LOOP;
-    v_len := (SELECT format('cardinality(%I)', c.name) FROM tgsis.chunk_columns(p_table) c
-               WHERE c.role = 'value' ORDER BY c.colorder LIMIT 1);
+    v_len := (SELECT CASE WHEN c.role = 'vector' THEN format('array_length(%I, 1)', c.name) ELSE format('cardinality(%I)', c.name) END
+                FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('value', 'vector') ORDER BY c.colorder LIMIT 1);
 
     -- 1. the row definition; a new column's default is read right after its ADD (the callers drop it next)
     FOREACH v_alter IN ARRAY p_alters LOOP
@@ -78,7 +79,20 @@ BEGIN
         END LOOP;
     END LOOP;
     PERFORM tgsis.comment_property_columns(v_reg.schemaname, v_reg.tablename || '_shape', p_properties, p_what);
-    PERFORM FROM tgsis.chunk_columns(p_table);  -- TG100 by name: a vector property, a reserved name, none left
+    -- a vector property added or renamed: its size is read from the catalog (tgsis.chunk_columns), which names it only
+    -- after this call; not built, refused by name (the class can go to rows, change, and come back)
+    SELECT string_agg(quote_ident(a.attname), ', ' ORDER BY a.attnum) INTO v_alter
+      FROM pg_attribute a JOIN pg_type t ON t.oid = a.atttypid
+     WHERE a.attrelid = v_shape AND a.attnum > 0 AND NOT a.attisdropped AND t.typcategory = 'A'
+       AND NOT (v_cols ? a.attnum::text AND v_cols -> a.attnum::text ->> 0 = a.attname);
+    IF v_alter IS NOT NULL THEN
+        RAISE EXCEPTION 'the vector property % of % cannot be added or renamed in chunks', v_alter, tgsis.chunk_relation(p_table, '')
+            USING ERRCODE = 'TG100',
+                  DETAIL = 'A vector property is stored in chunks (a two-dimensional array), but adding or renaming one on a class '
+                           'stored in chunks is not built; nothing was changed.',
+                  HINT = 'store the class in rows (tgsis.store_class_in_rows), change the property, then store it in chunks again';
+    END IF;
+    PERFORM FROM tgsis.chunk_columns(p_table);  -- TG100 by name: a reserved name, none left
     IF EXISTS (SELECT FROM pg_attribute a WHERE a.attrelid = v_shape AND a.attnum > 0 AND NOT a.attisdropped
                  AND v_cols ? a.attnum::text AND (v_cols -> a.attnum::text ->> 1)::oid <> a.atttypid) THEN
         RAISE EXCEPTION 'the type of a property of % cannot be changed in chunks', tgsis.chunk_relation(p_table, '')

@@ -20,10 +20,14 @@
 -- integer, bigint, real, double precision or boolean, whose elements may be
 -- NULL: only holes marks a hole; a model table keeps at least one float or
 -- ref column, NOT NULL, whose NULL marks the hole as before). typename is
--- the column's type (format_type). A column of any other type (a vector
--- property among them: its 2-D form is not built) is refused by name (TG100).
+-- the column's type (format_type). 'vector' (a class's vector property: a
+-- column t[] of size k > 1 in tgsis.catalog, t one of the value types): a
+-- two-dimensional t[] (slots x k) in the chunk table, typename the ELEMENT
+-- type and size k (NULL for every other role); a NULL vector is a row of k
+-- NULLs there, which no vector of the row table is (its CHECK refuses a NULL
+-- element). A column of any other type is refused by name (TG100).
 CREATE FUNCTION tgsis.chunk_columns(p_table text)
-RETURNS TABLE (name text, role text, keyorder integer, colorder integer, typename text)
+RETURNS TABLE (name text, role text, keyorder integer, colorder integer, typename text, size integer)
 LANGUAGE plpgsql
 STABLE
 SET search_path = pg_catalog, pg_temp
@@ -34,6 +38,8 @@ DECLARE
     v_bad     text;
     v_class   boolean;  -- a class's property table: its non-key columns are 'value's
     v_types   regtype[] := ARRAY['smallint', 'integer', 'bigint', 'real', 'double precision', 'boolean']::regtype[];
+    v_arrays  regtype[] := ARRAY['smallint[]', 'integer[]', 'bigint[]', 'real[]', 'double precision[]', 'boolean[]']::regtype[];
+    v_sizes   jsonb := '{}';  -- a class's vector properties: name -> k (tgsis.catalog)
 BEGIN
     SELECT * INTO v_reg FROM tgsis.chunk_registry(p_table) r;
     IF NOT FOUND OR v_reg.chunkcolumn IS NULL THEN
@@ -47,6 +53,12 @@ BEGIN
                   HINT = 'only the vertex and simplex tables registered with a chunk column have chunk tables';
     END IF;
     v_class := v_reg.classname IS NOT NULL;
+    IF v_class THEN
+        SELECT coalesce(jsonb_object_agg(p ->> 'name', (p ->> 'size')::integer), '{}') INTO v_sizes
+          FROM tgsis.catalog c CROSS JOIN LATERAL jsonb_array_elements(c.cell_properties) AS p
+         WHERE c.classname = v_reg.classname AND p ? 'size' AND (p ->> 'size')::integer > 1
+           AND coalesce(p ->> 'alignment', c.proalignment) = c.proalignment;
+    END IF;
     v_storage := tgsis.row_shape(p_table);  -- the row storage, or its shape once stored in chunks
     IF v_storage IS NULL THEN
         RAISE EXCEPTION 'the storage of % does not exist', format('%I.%I', v_reg.schemaname, v_reg.tablename)
@@ -88,6 +100,7 @@ BEGIN
            CASE WHEN a.attname = v_reg.chunkcolumn THEN 'chunk'
                 WHEN pk.keyorder IS NOT NULL THEN 'key'
                 WHEN v_class AND a.atttypid = ANY (v_types) THEN 'value'
+                WHEN v_class AND a.atttypid = ANY (v_arrays) AND v_sizes ? a.attname THEN 'vector'
                 WHEN v_class THEN NULL
                 WHEN a.attname = ANY (v_reg.chunkrefs) AND a.atttypid = 'bigint'::regtype THEN 'ref'
                 WHEN a.atttypid = 'double precision'::regtype AND NOT a.attname = ANY (v_reg.chunkrefs) THEN 'float'
@@ -96,7 +109,10 @@ BEGIN
            END,
            pk.keyorder,
            row_number() OVER (ORDER BY a.attnum)::integer,
-           format_type(a.atttypid, a.atttypmod)
+           CASE WHEN v_class AND a.atttypid = ANY (v_arrays) AND v_sizes ? a.attname AND pk.keyorder IS NULL
+                THEN format_type((SELECT t.typelem FROM pg_type t WHERE t.oid = a.atttypid), NULL)
+                ELSE format_type(a.atttypid, a.atttypmod) END,
+           CASE WHEN v_class AND a.atttypid = ANY (v_arrays) AND pk.keyorder IS NULL THEN (v_sizes ->> a.attname)::integer END
       FROM pg_attribute a LEFT JOIN pk ON pk.name = a.attname
      WHERE a.attrelid = v_storage AND a.attnum > 0 AND NOT a.attisdropped
        AND a.attname NOT IN ('revision', 'lastrevs', 'revclosed')
@@ -111,10 +127,12 @@ BEGIN
                                                        AND a.attnum = ANY (con.conkey))
        AND NOT (NOT v_class AND a.attname = ANY (v_reg.chunkrefs) AND a.atttypid = 'bigint'::regtype)
        AND NOT (NOT v_class AND a.atttypid = 'double precision'::regtype AND NOT a.attname = ANY (v_reg.chunkrefs))
-       AND NOT (a.atttypid = ANY (v_types) AND NOT (NOT v_class AND a.attname = ANY (v_reg.chunkrefs)));
+       AND NOT (a.atttypid = ANY (v_types) AND NOT (NOT v_class AND a.attname = ANY (v_reg.chunkrefs)))
+       AND NOT (v_class AND a.atttypid = ANY (v_arrays) AND v_sizes ? a.attname);
     IF v_class AND v_bad IS NULL
        AND NOT EXISTS (SELECT FROM pg_attribute a
-                        WHERE a.attrelid = v_storage AND a.attnum > 0 AND NOT a.attisdropped AND a.atttypid = ANY (v_types)
+                        WHERE a.attrelid = v_storage AND a.attnum > 0 AND NOT a.attisdropped
+                          AND (a.atttypid = ANY (v_types) OR (a.atttypid = ANY (v_arrays) AND v_sizes ? a.attname))
                           AND a.attname NOT IN ('revision', 'lastrevs', 'revclosed', v_reg.chunkcolumn)
                           AND NOT EXISTS (SELECT FROM pg_constraint con WHERE con.conrelid = v_storage AND con.contype = 'p'
                                                                           AND a.attnum = ANY (con.conkey))) THEN
@@ -132,6 +150,15 @@ BEGIN
                                                                           AND a.attnum = ANY (con.conkey))) THEN
         v_bad := 'no double precision nor vertex-id column (a model table''s slot is present where the first is not NULL)';
     END IF;
+    -- the readers unnest a class's arrays side by side in one call (a vector as its k components) and the writer
+    -- with two more (slot, _delete): PostgreSQL passes at most 100 arguments to a function (FUNC_MAX_ARGS)
+    IF v_class AND v_bad IS NULL
+       AND (SELECT count(*) FILTER (WHERE NOT v_sizes ? a.attname) + coalesce(sum((v_sizes ->> a.attname)::integer), 0)
+              FROM pg_attribute a
+             WHERE a.attrelid = v_storage AND a.attnum > 0 AND NOT a.attisdropped
+               AND a.attname NOT IN ('revision', 'lastrevs', 'revclosed', v_reg.keycolumn, v_reg.chunkcolumn)) > 98 THEN
+        v_bad := 'more than 98 property values a slot (a vector counts its size): the chunk readers unnest them in one call';
+    END IF;
     IF v_bad IS NOT NULL
        OR NOT EXISTS (SELECT FROM pg_constraint con JOIN pg_attribute a ON a.attrelid = con.conrelid AND a.attnum = ANY (con.conkey)
                        WHERE con.conrelid = v_storage AND con.contype = 'p' AND a.attname = v_reg.chunkcolumn
@@ -143,8 +170,8 @@ BEGIN
             USING ERRCODE = 'TG100',
                   DETAIL = CASE WHEN v_class
                                 THEN format('The chunk column %s must be a bigint of the primary key, every property a scalar '
-                                            'smallint, integer, bigint, real, double precision or boolean (vector properties '
-                                            'have no chunk form yet); not so: %s.', v_reg.chunkcolumn, coalesce(v_bad, 'the chunk column'))
+                                            'smallint, integer, bigint, real, double precision or boolean, or a vector of '
+                                            'them the catalog gives a size; not so: %s.', v_reg.chunkcolumn, coalesce(v_bad, 'the chunk column'))
                                 ELSE format('The chunk column %s must be a bigint of the primary key, the ref columns %s bigint '
                                             'columns, every other non-key column double precision or a scalar smallint, '
                                             'integer, bigint, real or boolean, and one a double precision or ref column; not so: %s.',
@@ -157,4 +184,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.chunk_columns(text) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.chunk_columns(text) IS
-    'the columns of a table of tgsis.chunk_registry (a model table registered for chunks, or a STATIC class''s property table named schema.table), from its live storage, in column order, each with its role in the chunk table: key, chunk (the local id), float (double precision[]), ref (integer[] relative to vbase, and <name>_wide) or value (a property, or a model table''s other scalar column: an array of its type, NULL elements allowed), and its type; TG200 for a table not registered for chunks, TG100 for a column the layout has no form for (a vector property among them)';
+    'the columns of a table of tgsis.chunk_registry (a model table registered for chunks, or a STATIC class''s property table named schema.table), from its live storage, in column order, each with its role in the chunk table: key, chunk (the local id), float (double precision[]), ref (integer[] relative to vbase, and <name>_wide) or value (a property, or a model table''s other scalar column: an array of its type, NULL elements allowed) or vector (a class''s vector property of size k: a 2-D array, slots x k, typename its element type, size k), and its type; TG200 for a table not registered for chunks, TG100 for a column the layout has no form for';

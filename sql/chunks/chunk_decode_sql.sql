@@ -16,6 +16,12 @@
 -- added property's fill (tgsis.alter_chunk_table adds it without a rewrite,
 -- then UPDATEs it): reading that column gives 40001
 -- (tgsis.chunk_array_missing), not NULL where new snapshots read the default.
+-- A vector property (role 'vector', size k: a 2-D array, slots x k) is
+-- unnested as k one-dimensional columns, its component slices arr[:][i:i]
+-- (aliases <name>#i: no property name holds '#'), read back as ARRAY[...] of
+-- them, NULL where its first component is (a NULL vector or a hole: the row
+-- table refuses a NULL element, and tgsis.chunk_encoding_checks a row partly
+-- NULL). Each slice detoasts the array once per chunk: k reads of it.
 CREATE FUNCTION tgsis.chunk_decode_sql(p_table text, p_alias text)
 RETURNS TABLE (select_list text, arrays text, aliases text, present text)
 LANGUAGE plpgsql
@@ -34,11 +40,21 @@ DECLARE
 BEGIN
     v_shift := (SELECT round(log(2, r.chunksize))::integer FROM tgsis.chunk_registry(p_table) r);
     v_refs := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder);
-    FOR v_c IN SELECT c.name, c.role FROM tgsis.chunk_columns(p_table) c ORDER BY c.colorder LOOP
+    FOR v_c IN SELECT c.name, c.role, c.typename, c.size FROM tgsis.chunk_columns(p_table) c ORDER BY c.colorder LOOP
         IF v_c.role = 'key' THEN
             v_select := v_select || format('%s.%I', v_a, v_c.name);
         ELSIF v_c.role = 'chunk' THEN
             v_select := v_select || format('(%s.chunk << %s) + (u.o - 1) AS %I', v_a, v_shift, v_c.name);
+        ELSIF v_c.role = 'vector' THEN
+            v_arrays := v_arrays || ARRAY(SELECT format('%s.%I[:][%s:%s]', v_a, v_c.name, i, i) FROM generate_series(1, v_c.size) AS i
+                                           ORDER BY i);
+            v_alias := v_alias || ARRAY(SELECT quote_ident(v_c.name || '#' || i) FROM generate_series(1, v_c.size) AS i ORDER BY i);
+            v_select := v_select || format('CASE WHEN %1$s.%2$I IS NULL THEN tgsis.chunk_array_missing(%3$L, %4$L, NULL::%5$s[]) '
+                                           'WHEN u.%6$I IS NULL THEN NULL ELSE ARRAY[%7$s] END AS %2$I',
+                                           v_a, v_c.name, p_table, v_c.name, v_c.typename, v_c.name || '#1',
+                                           (SELECT string_agg(format('u.%I', v_c.name || '#' || i), ', ' ORDER BY i)
+                                              FROM generate_series(1, v_c.size) AS i));
+            v_first := coalesce(v_first, format('NOT coalesce(u.o = ANY (%s.holes), false)', v_a));
         ELSIF v_c.role IN ('float', 'value') THEN
             v_arrays := v_arrays || format('%s.%I', v_a, v_c.name);
             v_alias := v_alias || quote_ident(v_c.name);

@@ -17,8 +17,11 @@
 -- Returned as SQL boolean expressions over the alias c, built
 -- from the registry (tgsis.chunk_columns); the caller ANDs them (NULL counts
 -- as false). A class's property arrays (role 'value') may hold NULL at
--- present slots: only NULL at every hole is required of them. Internal: runs
--- with the caller's rights.
+-- present slots: only NULL at every hole is required of them. A vector
+-- property (role 'vector', size k): a two-dimensional array from [1][1], the
+-- chunk's length x k, each row all NULL (a NULL vector, or a hole: every hole
+-- is) or without NULL (the row table refuses a NULL element): a row partly
+-- NULL would read as a NULL vector. Internal: runs with the caller's rights.
 CREATE FUNCTION tgsis.chunk_encoding_checks(p_table text)
 RETURNS text[]
 LANGUAGE plpgsql
@@ -31,8 +34,9 @@ DECLARE
 BEGIN
     v_size := (SELECT r.chunksize FROM tgsis.chunk_registry(p_table) r);
     v_len := (SELECT CASE WHEN c.role IN ('float', 'value') THEN format('cardinality(c.%I)', c.name)
+                          WHEN c.role = 'vector' THEN format('array_length(c.%I, 1)', c.name)
                           ELSE format('cardinality(coalesce(c.%I, c.%I))', c.name, c.name || '_wide') END
-                FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref', 'value') ORDER BY c.colorder LIMIT 1);
+                FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref', 'value', 'vector') ORDER BY c.colorder LIMIT 1);
     RETURN ARRAY[format('%s BETWEEN 1 AND %s', v_len, v_size),
                  format('(c.holes IS NULL OR (cardinality(c.holes) > 0 AND NOT (%s = ANY (c.holes))))', v_len)]
         -- (array_positions finds the NULLs in C: the check runs on every upload; the CASE keeps it from
@@ -52,6 +56,15 @@ BEGIN
                                'AND cardinality(c.%1$I) = %2$s THEN coalesce(c.holes::integer[], ''{}'') '
                                '<@ coalesce(array_positions(c.%1$I, NULL), ''{}'') ELSE false END)', c.name, v_len)
                    FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'value' ORDER BY c.colorder)
+        -- a vector property's 2-D array: present, the chunk's length x k from [1][1], each row all NULL or none, every
+        -- hole's row NULL (one pass over its elements)
+        || ARRAY(SELECT format('(c.%1$I IS NOT NULL AND CASE WHEN array_ndims(c.%1$I) = 2 AND array_lower(c.%1$I, 1) = 1 '
+                               'AND array_lower(c.%1$I, 2) = 1 AND array_length(c.%1$I, 1) = %2$s AND array_length(c.%1$I, 2) = %3$s '
+                               'THEN NOT EXISTS (SELECT FROM unnest(c.%1$I) WITH ORDINALITY AS e(x, n) GROUP BY (e.n - 1) / %3$s '
+                               'HAVING count(e.x) NOT IN (0, %3$s) '
+                               'OR (count(e.x) > 0 AND ((e.n - 1) / %3$s + 1) = ANY (coalesce(c.holes::bigint[], ''{}'')))) '
+                               'ELSE false END)', c.name, v_len, c.size)
+                   FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'vector' ORDER BY c.colorder)
         || ARRAY(SELECT format('(c.vbase IS NOT NULL) = (c.%1$I IS NOT NULL) AND (c.vbase IS NULL) = (c.%2$I IS NOT NULL)',
                                c.name, c.name || '_wide')
                    FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder)

@@ -142,6 +142,10 @@ BEGIN
     SELECT format('ROW(%s)::%s', string_agg(
                CASE WHEN c.role IN ('key', 'chunk') THEN format('(%%1$s).%I', c.name)
                     WHEN c.role IN ('float', 'value') THEN format('c.%I[%s]', c.name, v_slot)
+                    -- a vector property's row of its 2-D array (NULL: a NULL vector; tgsis.chunk_decode_sql's form)
+                    WHEN c.role = 'vector' THEN format('CASE WHEN c.%I[%s][1] IS NULL THEN NULL ELSE ARRAY[%s] END', c.name, v_slot,
+                                                       (SELECT string_agg(format('c.%I[%s][%s]', c.name, v_slot, i), ', ' ORDER BY i)
+                                                          FROM generate_series(1, c.size) AS i))
                     ELSE format('CASE WHEN c.vbase IS NOT NULL THEN c.vbase + %s ELSE c.%I[%s] END',
                                 CASE WHEN c.name = v_first THEN format('c.%I[%s]', c.name, v_slot)
                                      ELSE format('c.%I[%s] + c.%I[%s]', v_first, v_slot, c.name, v_slot) END,
@@ -150,9 +154,11 @@ BEGIN
       FROM tgsis.chunk_columns(v_table) c;
     v_present := (SELECT CASE WHEN f.role = 'value' THEN format('(%s <= cardinality(c.%I) AND NOT coalesce(%s = ANY (c.holes), false))',
                                                                 v_slot, f.name, v_slot)
+                              WHEN f.role = 'vector' THEN format('(%s <= array_length(c.%I, 1) AND NOT coalesce(%s = ANY (c.holes), false))',
+                                                                 v_slot, f.name, v_slot)
                               WHEN f.role = 'float' THEN format('c.%I[%s] IS NOT NULL', f.name, v_slot)
                               ELSE format('(c.%I[%s] IS NOT NULL OR c.%I[%s] IS NOT NULL)', f.name, v_slot, f.name || '_wide', v_slot) END
-                    FROM tgsis.chunk_columns(v_table) f WHERE f.role IN ('float', 'ref', 'value') ORDER BY f.colorder LIMIT 1);
+                    FROM tgsis.chunk_columns(v_table) f WHERE f.role IN ('float', 'ref', 'value', 'vector') ORDER BY f.colorder LIMIT 1);
     v_keytext := format('concat_ws(%L, %s)', ', ',
                         (SELECT string_agg(format('(%%1$s).%I::text', k), ', ' ORDER BY o) FROM unnest(v_keycols) WITH ORDINALITY AS u(k, o)));
     -- the state of the row's slot in the visible version of its chunk, read with this statement's snapshot

@@ -24,7 +24,8 @@
 -- Not idempotent: a second call refuses by name (TG201). Runs with the
 -- caller's rights (tgsis's owner, who owns the storage). A class's property
 -- table (tgsis.chunk_registry, 'schema.table') gets its chunk table in its
--- own schema, with one array per property of the property's own type
+-- own schema, with one array per property of the property's own type, a
+-- vector property's two-dimensional (slots x k)
 -- (docs/storage.md, "Property chunks: the contract").
 CREATE FUNCTION tgsis.create_chunk_table(p_table text)
 RETURNS regclass
@@ -82,7 +83,8 @@ BEGIN
     FOR v_c IN SELECT c.name, c.role, c.typename FROM tgsis.chunk_columns(p_table) c WHERE c.keyorder IS NULL ORDER BY c.colorder LOOP
         v_defs := v_defs || CASE WHEN v_c.role = 'float' THEN format('%I double precision[] COMPRESSION %s', v_c.name, v_float)
                                  -- a property: an array of its own type (lz4 for doubles, as coordinates)
-                                 WHEN v_c.role = 'value' THEN format('%I %s[] COMPRESSION %s', v_c.name, v_c.typename,
+                                 -- (a vector property: the same array type, two-dimensional, slots x k)
+                                 WHEN v_c.role IN ('value', 'vector') THEN format('%I %s[] COMPRESSION %s', v_c.name, v_c.typename,
                                                                      CASE WHEN v_c.typename = 'double precision' THEN v_float
                                                                           ELSE 'pglz' END)
                                  ELSE format('%I integer[] COMPRESSION pglz', v_c.name) END;
@@ -100,7 +102,7 @@ BEGIN
                    format('chunk storage of %s.%s (issue 40, docs/storage.md): one row per block of %s consecutive %s of one object '
                           'and per chunk version; nothing reads it yet but tgsis.write_chunk_rows and %s.%s_rows',
                           v_reg.schemaname, v_reg.tablename, v_reg.chunksize, v_reg.chunkcolumn, v_reg.schemaname, v_name));
-    FOR v_c IN SELECT c.name, c.role FROM tgsis.chunk_columns(p_table) c ORDER BY c.colorder LOOP
+    FOR v_c IN SELECT c.name, c.role, c.size FROM tgsis.chunk_columns(p_table) c ORDER BY c.colorder LOOP
         v_coldesc := col_description(v_storage, (SELECT a.attnum FROM pg_attribute a WHERE a.attrelid = v_storage AND a.attname = v_c.name)::integer);
         IF v_c.role = 'chunk' THEN
             EXECUTE format('COMMENT ON COLUMN %s.chunk IS %L', v_chunk,
@@ -112,6 +114,10 @@ BEGIN
         ELSIF v_c.role = 'value' THEN
             EXECUTE format('COMMENT ON COLUMN %s.%I IS %L', v_chunk, v_c.name,
                            format('%s per slot (NULL: no value, or a hole when holes lists the slot)', coalesce(v_coldesc, v_c.name)));
+        ELSIF v_c.role = 'vector' THEN
+            EXECUTE format('COMMENT ON COLUMN %s.%I IS %L', v_chunk, v_c.name,
+                           format('%s: slots x %s, a vector per slot (a row of %s NULLs: no value, or a hole when holes lists '
+                                  'the slot)', coalesce(v_coldesc, v_c.name), v_c.size, v_c.size));
         ELSIF v_c.role = 'float' THEN
             EXECUTE format('COMMENT ON COLUMN %s.%I IS %L', v_chunk, v_c.name,
                            format('%s per slot, bit-exact (NULL: a hole)', coalesce(v_coldesc, v_c.name)));

@@ -26,7 +26,8 @@
 -- Returns the number of chunk versions written. Internal: the caller's rights.
 -- The table is one of tgsis.chunk_registry: a model table, or a class's
 -- property table ('schema.table'), whose NULL values stay NULL in their slot
--- (holes alone marks the absent ids).
+-- (holes alone marks the absent ids); a vector property's chunk array is
+-- two-dimensional (slots x k), a NULL vector's row and a hole's k NULLs.
 CREATE FUNCTION tgsis.rows_to_chunks(p_table text)
 RETURNS bigint
 LANGUAGE plpgsql
@@ -76,7 +77,8 @@ BEGIN
     -- the arrays of values (coordinates, or a class's properties), built alike
     v_floats := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'value') ORDER BY c.colorder);
     v_refs := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder);
-    v_vals := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref', 'value') ORDER BY c.colorder);
+    v_vals := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref', 'value', 'vector')
+                     ORDER BY c.colorder);
     v_k := ARRAY(SELECT quote_ident(k) FROM unnest(v_keys) AS k) || 'chunk'::text;
     v_parts := jsonb_build_object(
         'storage', v_storage::text,
@@ -126,6 +128,11 @@ BEGIN
         'enc', array_to_string(
             ARRAY(SELECT format('array_agg(CASE WHEN s.slot = m.slot THEN m.%1$I END ORDER BY s.slot) AS %1$I', f)
                     FROM unnest(v_floats) AS f)
+            -- a vector property: its vectors as the rows of a 2-D array (a hole's and a NULL vector's: k NULLs; a vector
+            -- not of k values, which the row table's CHECK refuses, would fail the aggregate, 2202E)
+            || ARRAY(SELECT format('array_agg(CASE WHEN s.slot = m.slot AND m.%1$I IS NOT NULL THEN m.%1$I '
+                                   'ELSE array_fill(NULL::%2$s, ARRAY[%3$s]) END ORDER BY s.slot) AS %1$I', c.name, c.typename, c.size)
+                       FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'vector' ORDER BY c.colorder)
             || ARRAY(SELECT format('CASE WHEN m.fits THEN array_agg(CASE WHEN m.fits AND s.slot = m.slot THEN (m.%I - %s)::integer END '
                                    'ORDER BY s.slot) END AS %I',
                                    r, CASE WHEN r = v_refs[1] THEN 'm.vmin' ELSE format('m.%I', v_refs[1]) END, r)

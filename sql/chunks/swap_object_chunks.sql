@@ -89,6 +89,13 @@ BEGIN
     END IF;
     -- (a model table with columns of role 'value', a G-map dart's acellid and positive: model 1's client encodes no
     -- such arrays, which would be left NULL; a class's property table is all 'value's, encoded by its own client path)
+    -- (a class's vector property: the client has no encoding of its 2-D arrays, which would be left NULL)
+    IF EXISTS (SELECT FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'vector') THEN
+        RAISE EXCEPTION '% has vector properties, which tgsis.% does not write: %', p_table, 'swap_object_chunks',
+                        (SELECT string_agg(c.name, ', ' ORDER BY c.colorder) FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'vector')
+            USING ERRCODE = 'TG100',
+                  HINT = 'write its rows through the face or tgsis.write_property_rows';
+    END IF;
     IF v_reg.classname IS NULL AND EXISTS (SELECT FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'value') THEN
         RAISE EXCEPTION 'tgsis.% has columns tgsis.% does not write: %', quote_ident(p_table), 'swap_object_chunks',
                         (SELECT string_agg(c.name, ', ' ORDER BY c.colorder) FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'value')

@@ -45,7 +45,13 @@
 -- by several statements: another session could change it in between), or
 -- without the row table's columns (of its types) or _delete, a
 -- NULL key, value or _delete, a negative id, a key twice (TG100), a row
--- breaking a CHECK constraint of the row table (23514, as the table would).
+-- breaking a CHECK constraint of the row table (23514, as the table would),
+-- a vector property's value not NULL nor k values without NULL (TG100, by
+-- name, before the CHECKs: the contract's answer for a wrong length). A
+-- vector property (role 'vector') travels through the merge as its k
+-- components <name>#i, scalar columns like the others (its old chunk's
+-- slices arr[:][i:i] unnested), and is encoded again as the rows of a 2-D
+-- array (k NULLs at a hole and at a NULL vector).
 -- The callers take the objects' write locks and note the changed objects
 -- (tgsis.object_write_lock, tgsis.note_changed_objects), as they do for rows.
 -- A double precision key (model 2's times) is compared by the float8 =
@@ -82,7 +88,10 @@ DECLARE
     v_fkeys    text[];    -- those of double precision (model 2's times)
     v_floats   text[];
     v_refs     text[];
-    v_vals     text[];    -- every non-key column, in column order
+    v_vals     text[];    -- every non-key column but the vector properties, in column order
+    v_vecs     text[];    -- the vector properties (role 'vector': a 2-D array, slots x k)
+    v_comps    text[];    -- their components, <name>#i (no property name holds '#'), written as scalar columns are
+    v_first    record;    -- a class's first property column: its array's length is the chunk's
     v_missing  text;
     v_problem  text;
     v_con      record;
@@ -115,10 +124,14 @@ BEGIN
     v_floats := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'value') ORDER BY c.colorder);
     v_refs := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder);
     v_vals := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref', 'value') ORDER BY c.colorder);
+    v_vecs := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'vector' ORDER BY c.colorder);
+    v_comps := ARRAY(SELECT c.name || '#' || i FROM tgsis.chunk_columns(p_table) c CROSS JOIN LATERAL generate_series(1, c.size) AS i
+                      WHERE c.role = 'vector' ORDER BY c.colorder, i);
+    SELECT c.name, c.role INTO v_first FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('value', 'vector') ORDER BY c.colorder LIMIT 1;
     -- a NULL value would be a hole in a model table; in a class's table only its NOT NULL columns refuse it
     v_notnull := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c
                         WHERE c.role IN ('float', 'ref')
-                           OR (c.role = 'value' AND EXISTS (SELECT FROM pg_attribute a WHERE a.attrelid = v_storage
+                           OR (c.role IN ('value', 'vector') AND EXISTS (SELECT FROM pg_attribute a WHERE a.attrelid = v_storage
                                                                 AND a.attname = c.name AND a.attnotnull))
                         ORDER BY c.colorder);
 
@@ -176,6 +189,26 @@ BEGIN
                   DETAIL = format('Ids are 0 or more, the columns of %s are NOT NULL (%s), and each key is written once by one call.',
                                   v_name, coalesce(array_to_string(v_notnull, ', '), 'none')),
                   HINT = 'give each key once, with all its values';
+    END IF;
+    -- a vector property's value: k values, none NULL (the row table's CHECK), or NULL as a whole; refused by name
+    v_problem := NULL;
+    FOR v_con IN SELECT c.name, c.size FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'vector' ORDER BY c.colorder LOOP
+        EXECUTE format('SELECT EXISTS (SELECT FROM %1$s r WHERE NOT r._delete AND r.%2$I IS NOT NULL '
+                       'AND NOT coalesce(array_ndims(r.%2$I) = 1 AND array_lower(r.%2$I, 1) = 1 AND cardinality(r.%2$I) = %3$s '
+                       'AND array_position(r.%2$I, NULL) IS NULL, false))', p_rows, v_con.name, v_con.size) INTO v_more;
+        IF v_more THEN
+            v_problem := concat_ws(', ', v_problem, quote_ident(v_con.name));
+        END IF;
+    END LOOP;
+    IF v_problem IS NOT NULL THEN
+        RAISE EXCEPTION 'cannot write these rows into %: a value of % is not a vector of its size',
+                        v_name, v_problem
+            USING ERRCODE = 'TG100',
+                  DETAIL = format('A vector property''s value is NULL or a one-dimensional array from 1 of exactly its size (%s), '
+                                  'with no NULL element, as the row table''s CHECK requires.',
+                                  (SELECT string_agg(format('%I: %s', c.name, c.size), ', ' ORDER BY c.colorder)
+                                     FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'vector')),
+                  HINT = 'give each vector property exactly its number of components, or NULL for no value';
     END IF;
     FOR v_con IN SELECT con.conname, pg_get_expr(con.conbin, con.conrelid) AS expr
                    FROM pg_constraint con WHERE con.conrelid = v_storage AND con.contype = 'c'
@@ -252,8 +285,11 @@ BEGIN
         'i_K', array_to_string(ARRAY(SELECT 'i.' || k FROM unnest(v_k) AS k), ', '),
         'match_c_k', array_to_string(ARRAY(SELECT format('c.%s = k.%s', k, k) FROM unnest(v_k) AS k), ' AND '),
         'arrays', array_to_string(ARRAY(SELECT format('v.%I', f) FROM unnest(v_floats) AS f)
+                                  -- (a vector property's components: the slices arr[:][i:i] of its 2-D array)
+                                  || ARRAY(SELECT format('v.%I[:][%s:%s]', split_part(x, '#', 1), split_part(x, '#', 2),
+                                                         split_part(x, '#', 2)) FROM unnest(v_comps) AS x)
                                   || ARRAY(SELECT format('v.%I, v.%I', r, r || '_wide') FROM unnest(v_refs) AS r), ', '),
-        'alias', array_to_string(ARRAY(SELECT quote_ident(f) FROM unnest(v_floats) AS f)
+        'alias', array_to_string(ARRAY(SELECT quote_ident(f) FROM unnest(v_floats || v_comps) AS f)
                                  || ARRAY(SELECT format('%I, %I', r, r || '_wide') FROM unnest(v_refs) AS r), ', '),
         -- a slot present in the merged chunk: a model table's first double precision or vertex-id column is NOT NULL
         -- exactly there (those columns are NOT NULL; its 'value' columns, a G-map dart's acellid, may be NULL); a
@@ -264,15 +300,16 @@ BEGIN
                                      (SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref')
                                        ORDER BY c.colorder LIMIT 1)) END,
         'presentcol', CASE WHEN v_reg.classname IS NOT NULL
-                           THEN format(', CASE WHEN u.slot IS NULL THEN o.slot <= coalesce(cardinality(v.%I), 0) '
+                           THEN format(', CASE WHEN u.slot IS NULL THEN o.slot <= coalesce(%s(v.%I%s), 0) '
                                        'AND NOT coalesce(o.slot = ANY (v.holes), false) ELSE NOT u._delete END AS _present',
-                                       v_floats[1])
+                                       CASE WHEN v_first.role = 'vector' THEN 'array_length' ELSE 'cardinality' END, v_first.name,
+                                       CASE WHEN v_first.role = 'vector' THEN ', 1' ELSE '' END)
                            ELSE '' END,
         'u_K', array_to_string(ARRAY(SELECT 'u.' || k FROM unnest(v_k) AS k), ', '),
         'match_ug_k', array_to_string(ARRAY(SELECT format('ug.%s = k.%s', k, k) FROM unnest(v_k) AS k), ' AND '),
-        'uarr', array_to_string(ARRAY(SELECT format('array_agg(u.%I) AS %I', c, c) FROM unnest(v_vals) AS c), ', '),
-        'ugarr', array_to_string(ARRAY(SELECT format('ug.%I', c) FROM unnest(v_vals) AS c), ', '),
-        'unames', array_to_string(ARRAY(SELECT quote_ident(c) FROM unnest(v_vals) AS c), ', '),
+        'uarr', array_to_string(ARRAY(SELECT format('array_agg(u.%I) AS %I', c, c) FROM unnest(v_vals || v_comps) AS c), ', '),
+        'ugarr', array_to_string(ARRAY(SELECT format('ug.%I', c) FROM unnest(v_vals || v_comps) AS c), ', '),
+        'unames', array_to_string(ARRAY(SELECT quote_ident(c) FROM unnest(v_vals || v_comps) AS c), ', '),
         'mvals', array_to_string(ARRAY(
             SELECT format('CASE WHEN u.slot IS NULL THEN %s WHEN NOT u._delete THEN u.%I END AS %I',
                           CASE WHEN c = ANY (v_refs)
@@ -280,10 +317,12 @@ BEGIN
                                            CASE WHEN c = v_refs[1] THEN format('o.%I', c) ELSE format('o.%I + o.%I', v_refs[1], c) END,
                                            c || '_wide')
                                ELSE format('o.%I', c) END, c, c)
-              FROM unnest(v_vals) AS c), ', '),
+              FROM unnest(v_vals || v_comps) AS c), ', '),
         'rvals', array_to_string(ARRAY(SELECT format('r.%I::%s AS %I', c.name, c.typename, c.name)
                                          FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'value') ORDER BY c.colorder)
-                                 || ARRAY(SELECT format('r.%I::bigint AS %I', r, r) FROM unnest(v_refs) AS r), ', '),
+                                 || ARRAY(SELECT format('r.%I::bigint AS %I', r, r) FROM unnest(v_refs) AS r)
+                                 || ARRAY(SELECT format('(r.%I)[%s] AS %I', split_part(x, '#', 1), split_part(x, '#', 2), x)
+                                            FROM unnest(v_comps) AS x), ', '),
         -- a chunk's refs are relative when every difference fits integer, else absolute in the _wide columns
         -- (and the maxima of vtop, the chunk's bound of its vertex ids: vbase + 2 * the largest relative value, or
         -- the largest _wide id; chunk_encoding_checks says why twice)
@@ -302,6 +341,11 @@ BEGIN
         -- (the FILTERs: the columns a chunk does not use are not sorted)
         'enc', array_to_string(
             ARRAY(SELECT format('array_agg(m.%I ORDER BY m.slot) AS %I', f, f) FROM unnest(v_floats) AS f)
+            -- a vector property: the slots' vectors as the rows of a 2-D array (k NULLs at a hole and a NULL vector)
+            || ARRAY(SELECT format('array_agg(ARRAY[%s] ORDER BY m.slot) AS %I',
+                                   (SELECT string_agg(format('m.%I', x), ', ' ORDER BY i)
+                                      FROM unnest(v_comps) WITH ORDINALITY AS y(x, i) WHERE split_part(x, '#', 1) = vv), vv)
+                       FROM unnest(v_vecs) AS vv)
             || ARRAY(SELECT format('CASE WHEN e.fits THEN array_agg(CASE WHEN e.fits THEN (m.%I - %s)::integer END ORDER BY m.slot) FILTER (WHERE e.fits) END AS %I',
                                    r, CASE WHEN r = v_refs[1] THEN 'e.vmin' ELSE format('m.%I', v_refs[1]) END, r)
                      FROM unnest(v_refs) AS r)
@@ -309,21 +353,21 @@ BEGIN
                      FROM unnest(v_refs) AS r), ', '),
         'setcols', array_to_string(ARRAY['holes = n.holes']
                                    || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['vbase = n.vbase', 'vtop = n.vtop'] ELSE '{}'::text[] END
-                                   || ARRAY(SELECT format('%I = n.%I', c, c) FROM unnest(v_vals) AS c)
+                                   || ARRAY(SELECT format('%I = n.%I', c, c) FROM unnest(v_vals || v_vecs) AS c)
                                    || ARRAY(SELECT format('%I = n.%I', r || '_wide', r || '_wide') FROM unnest(v_refs) AS r), ', '),
         'inscols', array_to_string(v_k || ARRAY['revision', 'holes']
                                    || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['vbase', 'vtop'] ELSE '{}'::text[] END
-                                   || ARRAY(SELECT quote_ident(c) FROM unnest(v_vals) AS c)
+                                   || ARRAY(SELECT quote_ident(c) FROM unnest(v_vals || v_vecs) AS c)
                                    || ARRAY(SELECT quote_ident(r || '_wide') FROM unnest(v_refs) AS r), ', '),
         -- a chunk whose new content is the visible one bit for bit (array_send: -0.0 is not 0.0) is not written
         'same', array_to_string(ARRAY['z.holes IS NOT DISTINCT FROM v.holes']
                                 || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['z.vbase IS NOT DISTINCT FROM v.vbase'] ELSE '{}'::text[] END
                                 || ARRAY(SELECT format('array_send(z.%1$I) IS NOT DISTINCT FROM array_send(v.%1$I)', c)
-                                           FROM unnest(v_vals || ARRAY(SELECT r || '_wide' FROM unnest(v_refs) AS r)) AS c),
+                                           FROM unnest(v_vals || v_vecs || ARRAY(SELECT r || '_wide' FROM unnest(v_refs) AS r)) AS c),
                                 ' AND '),
         'insvals', array_to_string(ARRAY(SELECT 'n.' || k FROM unnest(v_k) AS k) || ARRAY['$2', 'n.holes']
                                    || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['n.vbase', 'n.vtop'] ELSE '{}'::text[] END
-                                   || ARRAY(SELECT 'n.' || quote_ident(c) FROM unnest(v_vals) AS c)
+                                   || ARRAY(SELECT 'n.' || quote_ident(c) FROM unnest(v_vals || v_vecs) AS c)
                                    || ARRAY(SELECT 'n.' || quote_ident(r || '_wide') FROM unnest(v_refs) AS r), ', '));
     v_sql := $q$
 WITH k AS (

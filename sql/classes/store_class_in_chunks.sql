@@ -23,7 +23,9 @@
 -- and download of an unversioned class move whole chunks
 -- (tgsis.write_property_chunks, src/tgsis/db/_property_chunks.py).
 -- tgsis.store_class_in_rows goes back, a versioned class with its history.
--- Vector properties have no chunk form yet (TG100, tgsis.chunk_columns).
+-- A vector property (size k) is a two-dimensional array, slots x k (plan K,
+-- area V; read and written through the face, the Python paths going through
+-- it too: the client codec has no vector form yet).
 -- A table with row-level security, policies, a user's trigger, or a view or
 -- foreign key over it is refused by name (TG202): a view can carry none of
 -- them, and dropping the rows would lose them without an error.
@@ -164,4 +166,4 @@ REVOKE ALL ON FUNCTION tgsis.store_class_in_chunks(text) FROM PUBLIC;
 GRANT EXECUTE ON FUNCTION tgsis.store_class_in_chunks(text) TO tgsis_admin;
 
 COMMENT ON FUNCTION tgsis.store_class_in_chunks(text) IS
-    'store the property table <schema>.<class>_cellpros of a STATIC class in chunks (opt-in, tgsis_admin members), versioned or not: <class>_cellpros_chunk filled from the rows (every row version when versioned) and verified (tgsis.rows_to_chunks), the row definition kept as <class>_cellpros_shape, <class>_cellpros made the face over the chunks (today''s columns and grants; INSERT, UPDATE, DELETE through it), a versioned class keeping its registration with the chunk table as its storage (guarded as <table>_ver was); TG100 for a temporal one or a vector property, TG201 when stored in chunks already, TG202 when the table has row-level security, policies, a user''s trigger or a view or foreign key over it; returns the chunk versions written; tgsis.store_class_in_rows goes back';
+    'store the property table <schema>.<class>_cellpros of a STATIC class in chunks (opt-in, tgsis_admin members), versioned or not: <class>_cellpros_chunk filled from the rows (every row version when versioned) and verified (tgsis.rows_to_chunks), the row definition kept as <class>_cellpros_shape, <class>_cellpros made the face over the chunks (today''s columns and grants; INSERT, UPDATE, DELETE through it), a versioned class keeping its registration with the chunk table as its storage (guarded as <table>_ver was); TG100 for a temporal one, TG201 when stored in chunks already, TG202 when the table has row-level security, policies, a user''s trigger or a view or foreign key over it; returns the chunk versions written; tgsis.store_class_in_rows goes back';

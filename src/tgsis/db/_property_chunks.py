@@ -98,7 +98,8 @@ def property_chunks(conn: Conn, fc: FeatureClass, table: str) -> PropertyChunks 
     """The chunk layout of the class's property table ``table`` if its bulk paths are open, else None.
 
     None: the table is rows (or anything but the face of ``tgsis.store_class_in_chunks``), or its chunk
-    table has a column this client does not encode. ``versioned``: the table is versioned (a download reads
+    table has a column this client does not encode (a vector property's 2-D array among them: such a class
+    is read and written through the face). ``versioned``: the table is versioned (a download reads
     the chunk versions the session sees, as the face; an upload goes by :func:`write_property_rows`, not
     :func:`upload_properties`). Read from the catalog.
     """
@@ -119,6 +120,15 @@ def _property_layout(conn: Conn, schema: str, table: str) -> PropertyChunks | No
     if row is None or row[1] != "v":
         return None
     oid, _, readable, insertable, versioned, name = row
+    # a vector property (2-D chunk arrays, size k in the catalog) has no client encoding yet: the face reads and
+    # writes such a class (its arrays are typed t[] as a scalar property's, so the catalog tells them apart)
+    vectors = conn.execute(
+        "SELECT EXISTS (SELECT FROM tgsis.catalog c CROSS JOIN LATERAL jsonb_array_elements(c.cell_properties) AS p "
+        "WHERE c.schemaname = %s AND c.cellprotable = %s AND coalesce((p ->> 'size')::integer, 1) > 1)",
+        (schema, table),
+    ).fetchone()
+    if vectors is None or vectors[0]:
+        return None
     attributes = conn.execute(
         "SELECT attname::text, format_type(atttypid, atttypmod) FROM pg_catalog.pg_attribute "
         "WHERE attrelid = %s AND attnum > 0 AND NOT attisdropped ORDER BY attnum",

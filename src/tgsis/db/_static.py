@@ -226,7 +226,9 @@ def copy_meshes(
         for i, values in enumerate(cell_values):
             groups.setdefault(tuple(p.name for p in props if p.name in values), []).append(i)
         layout = property_chunks(conn, fc, protable)
-        if layout is not None and layout.insertable and layout.versioned:
+        # vector properties in chunks have no client encoding (layout None): the server writes them, set-based
+        serverside = layout is None and any(p.size > 1 for p in props) and _stored_in_chunks(conn, fc.schema, protable)
+        if (layout is not None and layout.insertable and layout.versioned) or serverside:
             # versioned, in chunks: each new object's rows in one call, its chunks written once in the
             # working revision (the face's checks on the server), not one chunk rewrite per row
             for names, group in groups.items():
@@ -275,6 +277,12 @@ def copy_meshes(
                 ],
             )
     copy_extras(conn, fc, geoids, meshes, meanings, storage)
+
+
+def _stored_in_chunks(conn: Conn, schema: str, table: str) -> bool:
+    """Whether the class's property table ``schema.table`` is the face of ``tgsis.store_class_in_chunks``."""
+    row = conn.execute("SELECT tgsis.stored_in_chunks(%s, %s)", (schema, table)).fetchone()
+    return bool(row is not None and row[0])
 
 
 def simplex_rows(geoid: int, mesh: Mesh, table: str) -> ObjectRows:
