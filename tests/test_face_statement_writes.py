@@ -1,0 +1,260 @@
+"""Writes of many rows through the relational face: one rewrite per touched chunk per statement (issue 40).
+
+On chunks, ``tgsis.vrtx`` is a view whose row trigger (``tgsis.chunk_face_queue``) only keeps each
+row, and whose statement trigger (``tgsis.chunk_face_write``) checks and writes all of them when the
+statement ends (docs/storage.md, "The relational face: views with today's names"). Before, an INSERT
+or a DELETE rewrote its chunk for every row. What must hold is what today's row storage does, so every
+test runs on both storages (``TGSIS_TEST_STORAGE``) and checks the same outcomes; the count of chunk
+writes is checked on chunks only. Hostile cases: the session's float output digits, a key inserted
+twice or already there, savepoints, functions and CTEs, two sessions writing one chunk.
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+from typing import Any
+
+import psycopg
+import pytest
+
+import tgsis
+from tests.sessions import Background, connect, wait_until_blocked
+
+Conn = psycopg.Connection[Any]
+
+FIRST = 2048  # new ids 2048 .. 2048 + 3071: exactly chunks 2, 3 and 4 of the fault (ids 0 .. 143 in chunk 0)
+NEW = 3072
+
+
+def _chunk_writes(conn: Conn) -> int:
+    """Tuples this transaction inserted, updated or deleted in the vertex chunks (pg_stat_xact_user_tables)."""
+    row = conn.execute(
+        "SELECT coalesce(sum(n_tup_ins + n_tup_upd + n_tup_del), 0) FROM pg_stat_xact_user_tables "
+        "WHERE schemaname = 'tgsis' AND relname = 'vrtx_chunk'"
+    ).fetchone()
+    assert row is not None
+    return int(row[0])
+
+
+def _count(conn: Conn, geoid: int, where: str = "true") -> int:
+    row = conn.execute(f"SELECT count(*) FROM tgsis.vrtx WHERE geoid = %s AND {where}", (geoid,)).fetchone()  # noqa: S608
+    assert row is not None
+    return int(row[0])
+
+
+def _sqlstate(conn: Conn, statement: str, params: Any = ()) -> str | None:
+    try:
+        with conn.transaction():
+            conn.execute(statement, params)
+    except psycopg.Error as exc:
+        return exc.sqlstate
+    return None
+
+
+def _insert(lo: int, hi: int) -> str:
+    return (
+        "INSERT INTO tgsis.vrtx SELECT %s, i, i * 0.5, -i * 0.25, i / 3.0 "  # noqa: S608
+        f"FROM generate_series({lo}::bigint, {hi}::bigint) i"
+    )
+
+
+def test_insert_update_delete_of_thousands_of_rows_write_each_chunk_once(
+    conn: Conn, fault_clone: int, db_storage: str
+) -> None:
+    geoid = fault_clone
+    with tgsis.in_version(conn, "e1"):
+        conn.commit()
+        assert conn.execute(_insert(FIRST, FIRST + NEW - 1), (geoid,)).rowcount == NEW
+        if db_storage == "chunks":
+            assert _chunk_writes(conn) <= 3  # three new chunks, each written once (was one rewrite per row)
+        # read your writes: the next statement of the transaction sees them
+        assert _count(conn, geoid, f"vrtxid >= {FIRST}") == NEW
+        conn.commit()
+        assert (
+            conn.execute(f"UPDATE tgsis.vrtx SET z = -z WHERE geoid = %s AND vrtxid >= {FIRST}", (geoid,)).rowcount
+            == NEW
+        )
+        if db_storage == "chunks":
+            # (in e1's working revision: a few tuple writes per chunk, the writer's own steps, not one per row)
+            assert _chunk_writes(conn) <= 9
+        conn.commit()
+        deleted = conn.execute(
+            f"DELETE FROM tgsis.vrtx WHERE geoid = %s AND vrtxid >= {FIRST} AND mod(vrtxid, 2) = 0 RETURNING vrtxid",
+            (geoid,),
+        ).fetchall()
+        assert sorted(r[0] for r in deleted) == list(range(FIRST, FIRST + NEW, 2))
+        if db_storage == "chunks":
+            assert _chunk_writes(conn) <= 9  # 1,536 rows deleted
+        conn.commit()
+        row = conn.execute(
+            f"SELECT count(*), sum(vrtxid), sum(z * 3 + vrtxid) FROM tgsis.vrtx WHERE geoid = %s AND vrtxid >= {FIRST}",
+            (geoid,),
+        ).fetchone()
+        conn.rollback()
+    odd = list(range(FIRST + 1, FIRST + NEW, 2))
+    assert row is not None and row[0] == NEW // 2 and row[1] == sum(odd)
+    assert abs(row[2]) < 1e-6  # z = -i / 3
+    # DEFAULT never saw them, and the session's kept rows are gone
+    assert _count(conn, geoid, f"vrtxid >= {FIRST}") == 0
+    if db_storage == "chunks":
+        kept = conn.execute("SELECT format('pg_temp.%I', 'tgsis_face_rows_' || 'tgsis.vrtx'::regclass::oid)").fetchone()
+        assert kept is not None
+        assert conn.execute(f"SELECT count(*) FROM {kept[0]}").fetchone() == (0,)  # noqa: S608
+    conn.rollback()
+
+
+NAN_PAYLOAD = struct.unpack(">d", bytes.fromhex("7ff8000000000123"))[0]
+NEGATIVE_NAN = struct.unpack(">d", bytes.fromhex("fff0000000000001"))[0]  # a signalling NaN's bits, sign set
+VALUES = [
+    -0.0,
+    math.nan,
+    NAN_PAYLOAD,
+    NEGATIVE_NAN,
+    5e-324,
+    0.1 + 0.2,
+    1 / 3,
+    -1.7976931348623157e308,
+    math.inf,
+    2.0**-1074 * 3,
+]
+
+
+def _bits(value: float) -> bytes:
+    return struct.pack(">d", value)
+
+
+@pytest.mark.parametrize("digits", [-15, 3])
+def test_values_are_written_bit_for_bit_whatever_the_session_s_float_digits(
+    conn: Conn, fault_clone: int, digits: int
+) -> None:
+    """The rows are kept typed between the row and the statement trigger (never as text): every bit arrives, a NaN's
+    payload and sign included, whatever the session's extra_float_digits (the values sent in binary: ``%b``)."""
+    geoid = fault_clone
+    assert _bits(NAN_PAYLOAD).hex() == "7ff8000000000123"  # (the client keeps the payload)
+    with tgsis.in_version(conn, "e1"):
+        conn.commit()
+        conn.execute(f"SET extra_float_digits = {digits}")
+        for k, value in enumerate(VALUES):
+            conn.execute("INSERT INTO tgsis.vrtx VALUES (%s, %s, %b, %b, %s)", (geoid, FIRST + k, value, value, 1.0))
+        # one INSERT ... SELECT of all of them (many rows of one statement)
+        conn.execute(
+            "INSERT INTO tgsis.vrtx SELECT geoid, vrtxid + 100, x, y, z FROM tgsis.vrtx "
+            f"WHERE geoid = %s AND vrtxid >= {FIRST}",
+            (geoid,),
+        )
+        conn.execute(
+            f"UPDATE tgsis.vrtx SET z = y WHERE geoid = %s AND vrtxid >= {FIRST}", (geoid,)
+        )  # an UPDATE keeps them too
+        conn.execute(f"DELETE FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = {FIRST + 101}", (geoid,))
+        rows = conn.execute(
+            f"SELECT vrtxid, float8send(x), float8send(z) FROM tgsis.vrtx WHERE geoid = %s AND vrtxid >= {FIRST} ORDER BY 1",
+            (geoid,),
+        ).fetchall()
+        conn.rollback()
+    expected = [(FIRST + k, _bits(v), _bits(v)) for k, v in enumerate(VALUES)]
+    expected += [(FIRST + 100 + k, _bits(v), _bits(v)) for k, v in enumerate(VALUES) if k != 1]
+    assert sorted((r[0], bytes(r[1]), bytes(r[2])) for r in rows) == sorted(expected)
+
+
+def test_a_key_there_or_twice_fails_the_statement_and_writes_nothing(conn: Conn, fault_clone: int) -> None:
+    geoid = fault_clone
+    with tgsis.in_version(conn, "e1"):
+        conn.commit()
+        before = _count(conn, geoid)
+        # one row of the INSERT ... SELECT is there (id 143): 23505, none of the other 3,000 written
+        assert _sqlstate(conn, _insert(143, 3143), (geoid,)) == "23505"
+        # the statement inserts one key twice
+        twice = "INSERT INTO tgsis.vrtx SELECT %s, 5000 + mod(i, 3), 0, 0, 0 FROM generate_series(0, 3) i"
+        assert _sqlstate(conn, twice, (geoid,)) == "23505"
+        # a key moved onto a key that is there
+        assert _sqlstate(conn, "UPDATE tgsis.vrtx SET vrtxid = 7 WHERE geoid = %s AND vrtxid = 8", (geoid,)) == "23505"
+        assert _count(conn, geoid) == before
+        # the failed statements left nothing behind for the next one of the same transaction
+        assert conn.execute(_insert(FIRST, FIRST + 9), (geoid,)).rowcount == 10
+        assert _count(conn, geoid) == before + 10
+        conn.rollback()
+
+
+def test_savepoints_functions_ctes_and_returning_see_the_statement_s_rows(conn: Conn, fault_clone: int) -> None:
+    geoid = fault_clone
+    conn.execute(
+        "CREATE FUNCTION pg_temp.insert_and_count(g bigint, lo bigint, hi bigint) RETURNS bigint LANGUAGE plpgsql AS $$ "
+        "BEGIN INSERT INTO tgsis.vrtx SELECT g, i, 1, 2, 3 FROM generate_series(lo, hi) i; "
+        "RETURN (SELECT count(*) FROM tgsis.vrtx WHERE geoid = g AND vrtxid BETWEEN lo AND hi); END $$"
+    )
+    with tgsis.in_version(conn, "e1"):
+        conn.commit()
+        # a function's INSERT is written when its own statement ends: its next statement reads it
+        assert conn.execute("SELECT pg_temp.insert_and_count(%s, 4000, 4099)", (geoid,)).fetchone() == (100,)
+        # savepoint: the rows of the rolled back statement are not written, the ones around it are
+        conn.execute(_insert(FIRST, FIRST + 9), (geoid,))
+        conn.execute("SAVEPOINT s")
+        conn.execute(_insert(FIRST + 10, FIRST + 19), (geoid,))
+        conn.execute("ROLLBACK TO SAVEPOINT s")
+        conn.execute(_insert(FIRST + 20, FIRST + 29), (geoid,))
+        # a CTE's INSERT with RETURNING, and a DELETE in the same query
+        returned = conn.execute(
+            "WITH i AS (INSERT INTO tgsis.vrtx SELECT %s, i, 0, 0, 0 FROM generate_series(4100, 4104) i RETURNING vrtxid), "
+            "d AS (DELETE FROM tgsis.vrtx WHERE geoid = %s AND vrtxid BETWEEN 4000 AND 4009 RETURNING vrtxid) "
+            "SELECT (SELECT array_agg(vrtxid ORDER BY vrtxid) FROM i), (SELECT count(*) FROM d)",
+            (geoid, geoid),
+        ).fetchone()
+        assert returned == ([4100, 4101, 4102, 4103, 4104], 10)
+        conn.commit()
+        ids = [
+            r[0]
+            for r in conn.execute(
+                f"SELECT vrtxid FROM tgsis.vrtx WHERE geoid = %s AND vrtxid >= {FIRST} ORDER BY 1", (geoid,)
+            )
+        ]
+        conn.rollback()
+    want = [*range(FIRST, FIRST + 10), *range(FIRST + 20, FIRST + 30), *range(4010, 4105)]
+    assert ids == want
+
+
+def test_two_sessions_inserting_into_one_chunk_keep_both_rows(
+    conn: Conn, fault_clone: int, db_dsn: str, db_storage: str
+) -> None:
+    """On chunks the second waits for the first's chunk lock, then merges into what it committed: no lost insert."""
+    geoid = fault_clone
+    a = connect(db_dsn, "first")
+    observer = connect(db_dsn, "observer", autocommit=True)
+    try:
+        tgsis.goto_version(a, "e1")
+        a.commit()
+        a.execute(_insert(FIRST, FIRST + 499), (geoid,))  # chunk 2, not committed
+        b = Background(
+            db_dsn, "second", lambda c: c.execute(_insert(FIRST + 500, FIRST + 999), (geoid,)).rowcount, version="e1"
+        )
+        if db_storage == "chunks":
+            wait_until_blocked(observer, b.pid, a.info.backend_pid)
+        else:
+            b.thread.join(30)  # rows: other keys, no wait
+        a.commit()
+        assert b.finish() == 500
+        # and the other way round: the second session deletes rows the first then changed meanwhile
+        a.execute(f"UPDATE tgsis.vrtx SET z = 99 WHERE geoid = %s AND vrtxid BETWEEN {FIRST} AND {FIRST + 9}", (geoid,))
+        b = Background(
+            db_dsn,
+            "deleter",
+            lambda c: c.execute(
+                f"DELETE FROM tgsis.vrtx WHERE geoid = %s AND vrtxid BETWEEN {FIRST} AND {FIRST + 9}", (geoid,)
+            ),
+            version="e1",
+        )
+        wait_until_blocked(observer, b.pid, a.info.backend_pid)
+        a.commit()
+        with pytest.raises(psycopg.errors.SerializationFailure, match="concurrent update"):
+            b.finish()
+    finally:
+        a.close()
+        observer.close()
+    with tgsis.in_version(conn, "e1"):
+        conn.commit()
+        row = conn.execute(
+            f"SELECT count(*), count(*) FILTER (WHERE z = 99) FROM tgsis.vrtx WHERE geoid = %s AND vrtxid >= {FIRST}",
+            (geoid,),
+        ).fetchone()
+        conn.rollback()
+    assert row == (1000, 10)
