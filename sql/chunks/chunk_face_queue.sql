@@ -6,7 +6,9 @@
 -- rewriting each touched chunk once. Per row this trigger only keeps the row: one
 -- INSERT into the session's pg_temp.tgsis_face_rows_<view oid> (the operation,
 -- the new and the old row; a DELETE's row read into pg_temp.tgsis_face_dels_<view
--- oid>), whose columns are of the face's own row type: the
+-- oid>), whose columns are of the face's own row type, each row numbered in the
+-- statement's order (pg_temp.tgsis_face_seq: the flush needs the order of a
+-- writable CTE's delete and insert of one key): the
 -- rows are kept TYPED, never as text (a float's text form loses a NaN's payload
 -- and, under the session's extra_float_digits, digits), so they are bit for bit
 -- what the statement gave. It returns NEW (OLD for a DELETE), so RETURNING
@@ -37,17 +39,18 @@ AS $$
 DECLARE
     v_rows    text := format('pg_temp.%I', 'tgsis_face_rows_' || TG_RELID);
     v_dels    text := format('pg_temp.%I', 'tgsis_face_dels_' || TG_RELID);
+    v_seq     text := 'pg_temp.tgsis_face_seq';  -- the order of the rows kept, across both tables and every face
     v_tab     text;
     v_keycols text[];
     v_n       bigint;
 BEGIN
     IF TG_LEVEL = 'STATEMENT' THEN
         IF to_regclass(v_rows) IS NULL THEN
-            EXECUTE format('CREATE TEMP TABLE %s (op "char" NOT NULL, n %s, o %s) ON COMMIT DELETE ROWS',
+            EXECUTE format('CREATE TEMP TABLE %s (op "char" NOT NULL, n %s, o %s, s bigint NOT NULL) ON COMMIT DELETE ROWS',
                            v_rows, TG_RELID::regclass, TG_RELID::regclass);
         END IF;
         IF to_regclass(v_dels) IS NULL THEN
-            EXECUTE format('CREATE TEMP TABLE %s (o %s NOT NULL) ON COMMIT DELETE ROWS', v_dels, TG_RELID::regclass);
+            EXECUTE format('CREATE TEMP TABLE %s (o %s NOT NULL, s bigint NOT NULL) ON COMMIT DELETE ROWS', v_dels, TG_RELID::regclass);
             -- the row key: the chunk table's key columns before revision, the chunk column in place of chunk
             SELECT array_agg(CASE WHEN a.attname = 'chunk' THEN r.chunkcolumn ELSE a.attname::text END ORDER BY a.attnum)
               INTO v_keycols
@@ -61,7 +64,10 @@ BEGIN
             EXECUTE format('CREATE UNIQUE INDEX ON %s (%s)', v_dels,
                            (SELECT string_agg(format('((o).%I)', k), ', ') FROM unnest(v_keycols) AS k));
         END IF;
-        FOREACH v_tab IN ARRAY ARRAY[v_rows, v_dels] LOOP
+        IF to_regclass(v_seq) IS NULL THEN
+            CREATE TEMP SEQUENCE tgsis_face_seq;
+        END IF;
+        FOREACH v_tab IN ARRAY ARRAY[v_rows, v_dels, v_seq] LOOP
             IF (SELECT c.relowner FROM pg_class c WHERE c.oid = to_regclass(v_tab))
                <> (SELECT r.oid FROM pg_roles r WHERE r.rolname = current_user) THEN
                 RAISE EXCEPTION 'the session''s table % was not made by the face''s trigger', v_tab
@@ -71,13 +77,13 @@ BEGIN
         RETURN NULL;
     END IF;
     IF TG_OP = 'INSERT' THEN
-        EXECUTE format('INSERT INTO %s VALUES (''I'', $1, NULL)', v_rows) USING NEW;
+        EXECUTE format('INSERT INTO %s VALUES (''I'', $1, NULL, nextval(%L))', v_rows, v_seq) USING NEW;
         RETURN NEW;
     ELSIF TG_OP = 'UPDATE' THEN
-        EXECUTE format('INSERT INTO %s VALUES (''U'', $1, $2)', v_rows) USING NEW, OLD;
+        EXECUTE format('INSERT INTO %s VALUES (''U'', $1, $2, nextval(%L))', v_rows, v_seq) USING NEW, OLD;
         RETURN NEW;
     END IF;
-    EXECUTE format('INSERT INTO %s VALUES ($1) ON CONFLICT DO NOTHING', v_dels) USING OLD;
+    EXECUTE format('INSERT INTO %s VALUES ($1, nextval(%L)) ON CONFLICT DO NOTHING', v_dels, v_seq) USING OLD;
     GET DIAGNOSTICS v_n = ROW_COUNT;
     IF v_n = 0 THEN
         -- met twice by the statement (DELETE ... USING a join): deleted and counted once, as on a table

@@ -137,8 +137,8 @@ BEGIN
     -- the session's temporary tables of rows to write: the face's columns, _delete, the row read
     FOREACH v_tab IN ARRAY ARRAY[v_now, v_queue] LOOP
         IF to_regclass(v_tab) IS NULL THEN
-            EXECUTE format('CREATE TEMP TABLE %s (LIKE %s, _delete boolean NOT NULL DEFAULT false, tgsis_old %s) ON COMMIT DELETE ROWS',
-                           v_tab, v_face, v_face);
+            EXECUTE format('CREATE TEMP TABLE %s (LIKE %s, _delete boolean NOT NULL DEFAULT false, tgsis_old %s, tgsis_seq bigint) '
+                           'ON COMMIT DELETE ROWS', v_tab, v_face, v_face);
         ELSIF (SELECT c.relowner FROM pg_class c WHERE c.oid = to_regclass(v_tab)) <> (SELECT r.oid FROM pg_roles r WHERE r.rolname = current_user) THEN
             RAISE EXCEPTION 'the session''s table % was not made by the face''s trigger', v_tab
                 USING ERRCODE = 'insufficient_privilege', HINT = 'drop the temporary table and write again';
@@ -170,13 +170,13 @@ BEGIN
         END LOOP;
     END IF;
     -- the kept rows, typed (the face's row type: bit for bit), moved into the queue
-    EXECUTE format('WITH r AS (DELETE FROM %1$s r RETURNING r.op, r.n, r.o), '
-                   '     d AS (DELETE FROM %4$s d RETURNING d.o), '
-                   '     kept AS (SELECT r.op, r.n, r.o FROM r UNION ALL SELECT ''D''::"char", NULL::%5$s, d.o FROM d), '
+    EXECUTE format('WITH r AS (DELETE FROM %1$s r RETURNING r.op, r.n, r.o, r.s), '
+                   '     d AS (DELETE FROM %4$s d RETURNING d.o, d.s), '
+                   '     kept AS (SELECT r.op, r.n, r.o, r.s FROM r UNION ALL SELECT ''D''::"char", NULL::%5$s, d.o, d.s FROM d), '
                    '     k AS (SELECT kept.*, kept.op = ''U'' AND %3$s AS same FROM kept) '
-                   'INSERT INTO %2$s SELECT (x.r).*, x.del, x.old FROM ('
-                   '  SELECT k.n AS r, false AS del, CASE WHEN k.same THEN k.o END AS old FROM k WHERE k.op IN (''I'', ''U'') '
-                   '  UNION ALL SELECT k.o, true, k.o FROM k WHERE k.op = ''D'' OR (k.op = ''U'' AND NOT k.same)) x',
+                   'INSERT INTO %2$s SELECT (x.r).*, x.del, x.old, x.s FROM ('
+                   '  SELECT k.n AS r, false AS del, CASE WHEN k.same THEN k.o END AS old, k.s FROM k WHERE k.op IN (''I'', ''U'') '
+                   '  UNION ALL SELECT k.o, true, k.o, k.s FROM k WHERE k.op = ''D'' OR (k.op = ''U'' AND NOT k.same)) x',
                    v_rows, v_queue,
                    array_to_string(ARRAY(SELECT format('(kept.n).%1$I IS NOT DISTINCT FROM (kept.o).%1$I', k)
                                            FROM unnest(v_keycols) AS k), ' AND '),
@@ -206,21 +206,53 @@ BEGIN
             RETURN NULL;
         END IF;
         IF v_distinct <> v_count THEN
-            -- a key inserted twice (an INSERT's rows, or an UPDATE moving a row onto a key the statement inserts):
-            -- what a plain table's key says
-            EXECUTE format('SELECT min(%s) FROM %s q WHERE q.tgsis_old IS NULL GROUP BY %s HAVING count(*) > 1 LIMIT 1',
-                           format(v_keytext, 'q'), v_queue,
-                           array_to_string(ARRAY(SELECT format('q.%I', k) FROM unnest(v_keycols) AS k), ', '))
-               INTO v_changed;
+            -- a key met more than once by the statement (writable CTEs: every sub-statement's rows reach this flush
+            -- together), its rows in the statement's order (tgsis_seq; an UPDATE changing the key deletes the old
+            -- key before it inserts the new): i an inserted row, d a deleted one, u one updated in place. Row by row,
+            -- as the row view answers: a key deleted then inserted is one write of its slot, compared with the
+            -- row the delete read; a row updated twice (an UPDATE ... FROM joining it twice, two WITH queries) is
+            -- 21000; a row deleted after the statement changed it, or changed after it deleted it, is 27000;
+            -- any other repetition inserts a key that is there (inserted twice, inserted before the statement
+            -- deletes or moves the row holding it, inserted after an update kept it): 23505
+            EXECUTE format('WITH e AS (SELECT %1$s AS kt, CASE WHEN q._delete THEN ''d'' WHEN q.tgsis_old IS NULL THEN ''i'' ELSE ''u'' END AS ev, '
+                           '                  q.tgsis_seq AS s, q._delete AS del FROM %2$s q), '
+                           '     g AS (SELECT e.kt, array_agg(e.ev ORDER BY e.s, e.del DESC) AS evs FROM e GROUP BY e.kt HAVING count(*) > 1) '
+                           'SELECT (array_agg(g.kt) FILTER (WHERE cardinality(array_positions(g.evs, ''d'')) '
+                           '                                     + cardinality(array_positions(g.evs, ''u'')) > 1))[1], '
+                           '       (array_agg(g.kt) FILTER (WHERE g.evs <> ARRAY[''d'', ''i'']))[1], '
+                           '       (array_agg(g.kt) FILTER (WHERE cardinality(array_positions(g.evs, ''u'')) = cardinality(g.evs)))[1] '
+                           '  FROM g',
+                           format(v_keytext, 'q'), v_queue)
+               INTO v_changed, v_dupkey, v_gone;
+            IF v_gone IS NOT NULL THEN
+                RAISE EXCEPTION 'one statement changed a row of %.% twice', TG_TABLE_SCHEMA, TG_TABLE_NAME
+                    USING ERRCODE = 'cardinality_violation', DETAIL = format('Row (%s)=(%s).', array_to_string(v_keycols, ', '), v_gone),
+                          HINT = 'change each row of a versioned view once in a statement';
+            END IF;
             IF v_changed IS NOT NULL THEN
+                RAISE EXCEPTION 'a row (%)=(%) of %.% to be changed was already changed by the current statement',
+                        array_to_string(v_keycols, ', '), v_changed, v_sch, v_tname
+                    USING ERRCODE = 'triggered_data_change_violation',
+                          DETAIL = 'The statement (its writable WITH queries) changes or deletes one row twice.',
+                          HINT = 'Change each row of a versioned view once in a statement.',
+                          TABLE = v_tname, SCHEMA = v_sch;
+            END IF;
+            IF v_dupkey IS NOT NULL THEN
                 RAISE EXCEPTION 'duplicate key value violates unique constraint "%"', v_tname || '_pkey'
                     USING ERRCODE = 'unique_violation',
-                          DETAIL = format('Key (%s)=(%s) is written twice by the statement in version %s.',
-                                          array_to_string(v_keycols, ', '), v_changed, quote_literal(tgsis.get_working_version())),
+                          DETAIL = format('Key (%s)=(%s) is there when the statement inserts it in version %s.',
+                                          array_to_string(v_keycols, ', '), v_dupkey, quote_literal(tgsis.get_working_version())),
                           CONSTRAINT = v_tname || '_pkey', TABLE = v_tname, SCHEMA = v_sch;
             END IF;
-            RAISE EXCEPTION 'one statement changed a row of %.% twice', TG_TABLE_SCHEMA, TG_TABLE_NAME
-                USING ERRCODE = 'cardinality_violation', HINT = 'change each row of a versioned view once in a statement';
+            -- each key deleted then inserted: the insert's row writes the slot, compared with the row the delete read
+            EXECUTE format('WITH dd AS (DELETE FROM %1$s q WHERE q._delete AND EXISTS ('
+                           '               SELECT FROM %1$s i WHERE NOT i._delete AND i.tgsis_old IS NULL AND %2$s) '
+                           '             RETURNING q.*) '
+                           'UPDATE %1$s i SET tgsis_old = dd.tgsis_old FROM dd '
+                           ' WHERE NOT i._delete AND i.tgsis_old IS NULL AND %3$s',
+                           v_queue,
+                           array_to_string(ARRAY(SELECT format('i.%1$I = q.%1$I', k) FROM unnest(v_keycols) AS k), ' AND '),
+                           array_to_string(ARRAY(SELECT format('i.%1$I = dd.%1$I', k) FROM unnest(v_keycols) AS k), ' AND '));
         END IF;
     END IF;
     v_geoids := v_keys::bigint[];
