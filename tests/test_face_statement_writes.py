@@ -176,6 +176,80 @@ def test_a_key_there_or_twice_fails_the_statement_and_writes_nothing(conn: Conn,
         conn.rollback()
 
 
+def test_a_row_met_twice_by_one_statement_answers_as_the_row_view(conn: Conn, fault_clone: int) -> None:
+    """Writable CTEs hand every sub-statement's rows to one flush: their order decides, as row by row on rows."""
+    geoid = fault_clone
+    bits = "SELECT float8send(x), float8send(y), float8send(z) FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = %s"
+    with tgsis.in_version(conn, "e1"):
+        conn.commit()
+        before = _count(conn, geoid)
+        x20 = conn.execute("SELECT x FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = 20", (geoid,)).fetchone()
+        # a key deleted, then inserted again by the same statement: one write of its slot
+        moved = conn.execute(
+            "WITH d AS (DELETE FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = 20 RETURNING *) "
+            "INSERT INTO tgsis.vrtx SELECT geoid, vrtxid, x + 1, y, z FROM d",
+            (geoid,),
+        ).rowcount
+        assert moved == 1
+        assert x20 is not None
+        assert conn.execute("SELECT x FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = 20", (geoid,)).fetchone() == (
+            x20[0] + 1,
+        )
+        assert _count(conn, geoid) == before
+        kept = [conn.execute(bits, (geoid, i)).fetchone() for i in (21, 22, 23)]
+        # a row updated twice (a join meeting it twice; two WITH queries): 21000, nothing written
+        twice = (
+            "UPDATE tgsis.vrtx v SET z = t.z FROM (VALUES (21, 1.0), (21, 2.0)) t(id, z) "
+            "WHERE v.geoid = %s AND v.vrtxid = t.id"
+        )
+        assert _sqlstate(conn, twice, (geoid,)) == "21000"
+        ctes = (
+            "WITH a AS (UPDATE tgsis.vrtx SET y = 1 WHERE geoid = %s AND vrtxid = 22 RETURNING vrtxid), "
+            "b AS (UPDATE tgsis.vrtx SET y = 2 WHERE geoid = %s AND vrtxid = 22 RETURNING vrtxid) SELECT 1"
+        )
+        assert _sqlstate(conn, ctes, (geoid, geoid)) == "21000"
+        # a row updated, then deleted, by one statement (the main query reads a first): refused, nothing written
+        # (the row view: 27000 in DEFAULT, 40001 in this version; the face: 27000)
+        gone = (
+            "WITH a AS (UPDATE tgsis.vrtx SET y = 5 WHERE geoid = %s AND vrtxid = 23 RETURNING vrtxid), "
+            "b AS (DELETE FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = 23 RETURNING vrtxid) "
+            "SELECT (SELECT count(*) FROM a) + (SELECT count(*) FROM b)"
+        )
+        assert _sqlstate(conn, gone, (geoid, geoid)) in ("27000", "40001")
+        assert [conn.execute(bits, (geoid, i)).fetchone() for i in (21, 22, 23)] == kept
+        assert _count(conn, geoid) == before
+        conn.rollback()
+
+
+def test_a_row_deleted_then_updated_by_one_statement_is_deleted_and_the_update_skipped(
+    conn: Conn, fault_clone: int, db_storage: str, request: pytest.FixtureRequest
+) -> None:
+    """The row view skips an UPDATE of a row its statement deleted before (PostgreSQL's own rule for a row
+    changed by the same command): the row is gone and the UPDATE counts 0. The face refuses it (27000):
+    its row trigger counted the UPDATE's row before the flush could know (docs/storage.md)."""
+    if db_storage == "chunks":
+        request.applymarker(
+            pytest.mark.xfail(
+                reason="the face answers 27000 where the row view skips the update (known, left for the flush's row trigger)",
+                strict=True,
+            )
+        )
+    geoid = fault_clone
+    with tgsis.in_version(conn, "e1"):
+        conn.commit()
+        before = _count(conn, geoid)
+        got = conn.execute(
+            "WITH a AS (UPDATE tgsis.vrtx SET y = 5 WHERE geoid = %s AND vrtxid = 24 RETURNING vrtxid), "
+            "b AS (DELETE FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = 24 RETURNING vrtxid) "
+            "SELECT (SELECT count(*) FROM b), (SELECT count(*) FROM a)",
+            (geoid, geoid),
+        ).fetchone()
+        assert got == (1, 0)
+        assert _count(conn, geoid) == before - 1
+        assert _count(conn, geoid, "vrtxid = 24") == 0
+        conn.rollback()
+
+
 def test_savepoints_functions_ctes_and_returning_see_the_statement_s_rows(conn: Conn, fault_clone: int) -> None:
     geoid = fault_clone
     conn.execute(
