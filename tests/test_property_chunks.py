@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 import struct
+import time
 from pathlib import Path
 from typing import Any
 
@@ -402,7 +403,15 @@ def test_roles_keep_the_class_tables_rights_through_the_face(db_dsn: str, conn: 
         # a session that wrote through the face holds tables of its row type until it ends: named, nothing changed
         state, message = sqlstate(admin, "SELECT tgsis.store_class_in_rows('layer')")
         assert state == "2BP01" and "tgsis_face_" in message
+        editor_pid = editor.info.backend_pid
         editor.close()
+        # (a closed session's backend drops its temporary tables as it exits, after the client has gone)
+        for _ in range(500):
+            row = admin.execute("SELECT count(*) FROM pg_stat_activity WHERE pid = %s", (editor_pid,)).fetchone()
+            admin.rollback()
+            if row == (0,):
+                break
+            time.sleep(0.02)
         assert sqlstate(admin, "SELECT tgsis.store_class_in_rows('layer')") == (None, "")
         admin.commit()
     assert conn.execute(
