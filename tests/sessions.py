@@ -67,3 +67,21 @@ def wait_until_blocked(observer: Conn, pid: int, by: int) -> None:
             return
         time.sleep(0.02)
     pytest.fail(f"backend {pid} never waited for backend {by}")
+
+
+def close_and_wait_gone(session: Conn, observer: Conn) -> None:
+    """Close ``session`` and wait until its backend has left ``pg_stat_activity``.
+
+    A closed session's backend drops its temporary tables (the face's work tables) in a transaction of its own as
+    it exits, after the client has gone: a switch of storage run at once may meet that transaction's snapshot
+    (TG202) or its tables (2BP01). A user retries, as the hint says; a test waits."""
+    pid = session.info.backend_pid
+    session.close()
+    deadline = time.monotonic() + 15
+    while time.monotonic() < deadline:
+        row = observer.execute("SELECT count(*) FROM pg_stat_activity WHERE pid = %s", (pid,)).fetchone()
+        observer.rollback()
+        if row == (0,):
+            return
+        time.sleep(0.02)
+    pytest.fail(f"backend {pid} did not exit")

@@ -22,7 +22,7 @@ import pytest
 
 import tgsis
 from tests.merge_data import curved_surface
-from tests.sessions import connect
+from tests.sessions import close_and_wait_gone, connect
 from tgsis.db import features as F
 from tgsis.mesh import GeometryCollection, Surface
 
@@ -308,7 +308,7 @@ def test_a_writer_under_an_older_snapshot_loses_and_duplicates_nothing_across_th
         "INSERT INTO tgsis.vrtx (geoid, vrtxid, x, y, z) VALUES (%s, %s, 1, 2, 3)", (fault_clone, before[1] + 1)
     )
     writer.commit()
-    writer.close()
+    close_and_wait_gone(writer, conn)
     conn.execute("SELECT tgsis.store_in_rows('vrtx')")
     conn.commit()
     assert conn.execute(

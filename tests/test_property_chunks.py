@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import math
 import struct
-import time
 from pathlib import Path
 from typing import Any
 
@@ -25,7 +24,7 @@ from psycopg import sql
 import tgsis
 from tests.merge_data import SIDE, curved_surface, every_view, sqlstate, varied_history
 from tests.roles import login_roles
-from tests.sessions import Background, connect, wait_until_blocked
+from tests.sessions import Background, close_and_wait_gone, connect, wait_until_blocked
 from tgsis.db import features as F
 from tgsis.mesh import Surface
 from tgsis.testing import TestServer
@@ -403,15 +402,7 @@ def test_roles_keep_the_class_tables_rights_through_the_face(db_dsn: str, conn: 
         # a session that wrote through the face holds tables of its row type until it ends: named, nothing changed
         state, message = sqlstate(admin, "SELECT tgsis.store_class_in_rows('layer')")
         assert state == "2BP01" and "tgsis_face_" in message
-        editor_pid = editor.info.backend_pid
-        editor.close()
-        # (a closed session's backend drops its temporary tables as it exits, after the client has gone)
-        for _ in range(500):
-            row = admin.execute("SELECT count(*) FROM pg_stat_activity WHERE pid = %s", (editor_pid,)).fetchone()
-            admin.rollback()
-            if row == (0,):
-                break
-            time.sleep(0.02)
+        close_and_wait_gone(editor, admin)
         assert sqlstate(admin, "SELECT tgsis.store_class_in_rows('layer')") == (None, "")
         admin.commit()
     assert conn.execute(
