@@ -222,18 +222,11 @@ def test_a_row_met_twice_by_one_statement_answers_as_the_row_view(conn: Conn, fa
 
 
 def test_a_row_deleted_then_updated_by_one_statement_is_deleted_and_the_update_skipped(
-    conn: Conn, fault_clone: int, db_storage: str, request: pytest.FixtureRequest
+    conn: Conn, fault_clone: int
 ) -> None:
     """The row view skips an UPDATE of a row its statement deleted before (PostgreSQL's own rule for a row
-    changed by the same command): the row is gone and the UPDATE counts 0. The face refuses it (27000):
-    its row trigger counted the UPDATE's row before the flush could know (docs/storage.md)."""
-    if db_storage == "chunks":
-        request.applymarker(
-            pytest.mark.xfail(
-                reason="the face answers 27000 where the row view skips the update (known, left for the flush's row trigger)",
-                strict=True,
-            )
-        )
+    changed by the same command): the row is gone and the UPDATE counts 0. So does the face: its row trigger
+    finds the key among the statement's deleted rows and skips the row (docs/storage.md)."""
     geoid = fault_clone
     with tgsis.in_version(conn, "e1"):
         conn.commit()
@@ -332,3 +325,85 @@ def test_two_sessions_inserting_into_one_chunk_keep_both_rows(
         ).fetchone()
         conn.rollback()
     assert row == (1000, 10)
+
+
+# One key met by two or three writable WITH queries of one statement, in every order: the face answers as the row
+# view. The row view is not written down here: each statement runs on a database stored in rows and on one in
+# chunks (the same fault cloned), and the answers (the SQLSTATE, or each query's row count and the keys' rows
+# after it, bit for bit) are compared. KEY is a vertex of the fault, NEWKEY none, NEXT the vertex a key change
+# moves onto KEY ("m"; "v" updates NEXT in place, "x" deletes it); in DEFAULT (rows of the working revision,
+# changed in place) and in e1 (inherited rows, closed and written anew).
+KEY, NEXT, NEWKEY = 30, 31, 5000
+_OPS = {
+    "i": "INSERT INTO tgsis.vrtx VALUES (%(g)s, %(k)s, 7.5, -7.5, 0.125) RETURNING vrtxid",
+    "u": "UPDATE tgsis.vrtx SET y = y + 1 WHERE geoid = %(g)s AND vrtxid = %(k)s RETURNING vrtxid",
+    "d": "DELETE FROM tgsis.vrtx WHERE geoid = %(g)s AND vrtxid = %(k)s RETURNING vrtxid",
+    "m": "UPDATE tgsis.vrtx SET vrtxid = %(k)s, z = z - 1 WHERE geoid = %(g)s AND vrtxid = %(n)s RETURNING vrtxid",
+    "v": "UPDATE tgsis.vrtx SET x = x * 2 WHERE geoid = %(g)s AND vrtxid = %(n)s RETURNING vrtxid",  # NEXT in place
+    "x": "DELETE FROM tgsis.vrtx WHERE geoid = %(g)s AND vrtxid = %(n)s RETURNING vrtxid",  # NEXT deleted
+}
+_ORDERS = [a + b for a in "iud" for b in "iud"] + [a + b + c for a in "iud" for b in "iud" for c in "iud"]
+_ORDERS += [o for o in (a + b for a in "iudm" for b in "iudm") if "m" in o] + ["mv", "mx", "vm", "xm", "vdu", "vdi"]
+
+
+def _sub_statements(order: str) -> str:
+    """The WITH queries of ``order``, run in its order (the main query reads them one after the other)."""
+    names = [f"w{n}" for n in range(len(order))]
+    ctes = ", ".join(f"{name} AS ({_OPS[op]})" for name, op in zip(names, order, strict=True))
+    return f"WITH {ctes} SELECT " + ", ".join(f"(SELECT count(*) FROM {name})" for name in names)  # noqa: S608
+
+
+def _answers(dsn: str, geoid: int, version: str) -> list[tuple[str, str, Any]]:
+    answers: list[tuple[str, str, Any]] = []
+    with psycopg.connect(dsn) as db, tgsis.in_version(db, version):
+        db.commit()
+        for key in (KEY, NEWKEY):
+            for order in _ORDERS:
+                params = {"g": geoid, "k": key, "n": NEXT}
+                try:
+                    with db.transaction():
+                        counts = db.execute(_sub_statements(order), params).fetchone()
+                        after = db.execute(
+                            "SELECT vrtxid, float8send(x), float8send(y), float8send(z) FROM tgsis.vrtx "
+                            "WHERE geoid = %(g)s AND vrtxid IN (%(k)s, %(n)s) ORDER BY 1",
+                            params,
+                        ).fetchall()
+                        answers.append((order, str(key), (counts, after)))
+                        raise _Undo
+                except _Undo:
+                    pass
+                except psycopg.Error as exc:
+                    answers.append((order, str(key), exc.sqlstate))
+        db.rollback()
+    return answers
+
+
+class _Undo(Exception):
+    """Rolls a statement's savepoint back once its answer is read."""
+
+
+@pytest.mark.parametrize("version", ["DEFAULT", "e1"])
+def test_every_order_of_writes_on_one_key_in_one_statement_answers_as_the_row_view(
+    make_database: Any, built_once_by_storage: Any, version: str
+) -> None:
+    on = {
+        storage: _answers(
+            make_database(built_once_by_storage(storage, "fault_clone")[0]),
+            built_once_by_storage(storage, "fault_clone")[1],
+            version,
+        )
+        for storage in ("rows", "chunks")
+    }
+    assert len(on["rows"]) == len(on["chunks"]) == 2 * len(_ORDERS)
+    differing = [(a, b[2]) for a, b in zip(on["rows"], on["chunks"], strict=True) if a != b]
+    # known: a key moved away by one UPDATE WITH query, then updated again by a second UPDATE WITH query (the
+    # face's statement trigger fires once per query for UPDATE: the second does not learn the move); the row view
+    # skips the update, the face refuses the statement, nothing written (docs/storage.md)
+    refused = [(a, b) for a, b in differing if a[0] in ("mm", "mv") and b in ("23505", "27000")]
+    assert len(refused) <= 4
+    # the row view's own defect: a row of an UPDATE that is not the statement's first row of the view is queued and
+    # written when the statement ends, where a key deleted by another WITH query meanwhile looks deleted by another
+    # transaction: 40001 (a retry fails again); the face skips it, as the row view's one-row path does ("du")
+    defect = [(a, b) for a, b in differing if a[0] == "vdu" and a[2] == "40001" and not isinstance(b, str)]
+    assert [b[0] for _, b in defect] == [(1, 1, 0)] * len(defect)
+    assert [d for d in differing if d not in refused + defect] == []

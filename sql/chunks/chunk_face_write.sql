@@ -107,6 +107,15 @@ DECLARE
     v_tab       text;
     v_split     boolean;   -- the flush's second group (features of classes without versioning) waits in v_now
     v_moved     bigint;
+    v_ev        record;    -- a key the statement wrote more than once: its events in order
+    v_code      text;
+    v_err       text;      -- the first refusal in the statement's order, its place and key
+    v_errat     bigint;
+    v_errkey    text;
+    v_at        bigint;
+    v_st        text;
+    v_nu        integer;
+    v_i         integer;
 BEGIN
     SELECT * INTO v_reg FROM tgsis.chunk_registry(v_table) r;
     v_objclass := coalesce((SELECT t.objectclass FROM tgsis.model_tables t WHERE t.tablename = v_reg.tablename AND v_reg.classname IS NULL),
@@ -169,9 +178,90 @@ BEGIN
             END IF;
         END LOOP;
     END IF;
-    -- the kept rows, typed (the face's row type: bit for bit), moved into the queue
+    -- the statement's writes of one key more than once, in its order (writable WITH queries: every
+    -- sub-statement's rows reach this flush together), answered as the row view answers them row by row:
+    -- events i (an inserted row, also an UPDATE's new key), u (an UPDATE keeping the key), d (a deleted row,
+    -- also an UPDATE's old key when it moves), S and X (an UPDATE, a DELETE the row trigger skipped, counted 0,
+    -- since the statement had deleted the row before). A key whose first event is not i was there when the
+    -- statement began (it read the row); its state walks orig -> changed (u) or gone (d) -> new (i):
+    --   i of a key there (orig, changed, new) is 23505; u or d (X) of a row changed or inserted again since the
+    --   statement read it is 27000; two UPDATEs of one row (u or S, an UPDATE ... FROM meeting it twice, two WITH
+    --   queries; also when the row was deleted before) are 21000, which the row view raises when the statement
+    --   ends, so after any of the others; a key whose first event is i and that has others: 23505 (there
+    --   already, or inserted twice). The first refusal in the statement's order is raised; nothing is written.
+    v_err := NULL;
+    FOR v_ev IN EXECUTE format(
+            'WITH e AS (SELECT %3$s AS kt, lower(r.op::text) AS ev, r.s FROM %1$s r WHERE r.op IN (''I'') '
+            '           UNION ALL SELECT %4$s, CASE WHEN r.op = ''U'' AND NOT (%5$s) THEN ''d'' WHEN r.op = ''U'' THEN ''u'' '
+            '                                     ELSE r.op::text END, r.s FROM %1$s r WHERE r.op IN (''U'', ''S'', ''X'') '
+            '           UNION ALL SELECT %3$s, ''i'', r.s FROM %1$s r WHERE r.op = ''U'' AND NOT (%5$s) '
+            '           UNION ALL SELECT %6$s, ''d'', d.s FROM %2$s d WHERE NOT d.m) '
+            'SELECT e.kt, array_agg(e.ev ORDER BY e.s, e.ev = ''i'') AS evs, array_agg(e.s ORDER BY e.s, e.ev = ''i'') AS ss '
+            '  FROM e GROUP BY e.kt HAVING count(*) > 1',
+            v_rows, v_dels, format(v_keytext, 'r.n'), format(v_keytext, 'r.o'),
+            array_to_string(ARRAY(SELECT format('(r.n).%1$I IS NOT DISTINCT FROM (r.o).%1$I', k) FROM unnest(v_keycols) AS k), ' AND '),
+            format(v_keytext, 'd.o')) LOOP
+        v_code := NULL;
+        IF v_ev.evs[1] = 'i' THEN
+            v_code := '23505';
+            v_at := CASE WHEN v_ev.evs <> array_fill('i'::text, ARRAY[cardinality(v_ev.evs)]) THEN v_ev.ss[1] ELSE v_ev.ss[2] END;
+        ELSE
+            v_st := 'orig';
+            v_nu := 0;
+            FOR v_i IN 1 .. cardinality(v_ev.evs) LOOP
+                v_at := v_ev.ss[v_i];
+                CASE v_ev.evs[v_i]
+                    -- (u or d of a key gone: only if the row trigger missed the statement's delete, a setting the
+                    -- session changed in between; refused, never written twice)
+                    WHEN 'u' THEN
+                        v_nu := v_nu + 1;
+                        IF v_st IN ('new', 'gone') THEN v_code := '27000'; ELSE v_st := 'changed'; END IF;
+                    WHEN 'S' THEN
+                        v_nu := v_nu + 1;
+                        IF v_st = 'new' THEN v_code := '27000'; END IF;
+                    WHEN 'd' THEN
+                        IF v_st <> 'orig' THEN v_code := '27000'; ELSE v_st := 'gone'; END IF;
+                    WHEN 'X' THEN
+                        IF v_st IN ('changed', 'new') THEN v_code := '27000'; ELSE v_st := 'gone'; END IF;
+                    ELSE  -- 'i'
+                        IF v_st <> 'gone' THEN v_code := '23505'; ELSE v_st := 'new'; END IF;
+                END CASE;
+                EXIT WHEN v_code IS NOT NULL;
+            END LOOP;
+            IF v_code IS NULL AND v_nu > 1 THEN
+                v_code := '21000';
+                v_at := NULL;  -- when the statement ends
+            END IF;
+        END IF;
+        IF v_code IS NOT NULL AND (v_err IS NULL OR (v_err = '21000' AND v_code <> '21000') OR v_at < v_errat) THEN
+            v_err := v_code;
+            v_errat := v_at;
+            v_errkey := v_ev.kt;
+        END IF;
+    END LOOP;
+    IF v_err = '21000' THEN
+        RAISE EXCEPTION 'one statement changed a row of %.% twice', TG_TABLE_SCHEMA, TG_TABLE_NAME
+            USING ERRCODE = 'cardinality_violation', DETAIL = format('Row (%s)=(%s).', array_to_string(v_keycols, ', '), v_errkey),
+                  HINT = 'change each row of a versioned view once in a statement';
+    ELSIF v_err = '27000' THEN
+        RAISE EXCEPTION 'a row (%)=(%) of %.% to be changed was already changed by the current statement',
+                array_to_string(v_keycols, ', '), v_errkey, v_sch, v_tname
+            USING ERRCODE = 'triggered_data_change_violation',
+                  DETAIL = 'The statement (its writable WITH queries) changes or deletes a row it changed, deleted or inserted again before.',
+                  HINT = 'Change each row of a versioned view once in a statement.',
+                  TABLE = v_tname, SCHEMA = v_sch;
+    ELSIF v_err = '23505' THEN
+        RAISE EXCEPTION 'duplicate key value violates unique constraint "%"', v_tname || '_pkey'
+            USING ERRCODE = 'unique_violation',
+                  DETAIL = format('Key (%s)=(%s) is there when the statement inserts it in version %s.',
+                                  array_to_string(v_keycols, ', '), v_errkey, quote_literal(tgsis.get_working_version())),
+                  CONSTRAINT = v_tname || '_pkey', TABLE = v_tname, SCHEMA = v_sch;
+    END IF;
+    PERFORM set_config('tgsis.face_deleted_' || TG_RELID, '', true);
+    -- the kept rows, typed (the face's row type: bit for bit), moved into the queue (the skipped ones, S and X,
+    -- and the old rows of moved keys, which the UPDATE's own row writes, only served the order above)
     EXECUTE format('WITH r AS (DELETE FROM %1$s r RETURNING r.op, r.n, r.o, r.s), '
-                   '     d AS (DELETE FROM %4$s d RETURNING d.o, d.s), '
+                   '     d AS (DELETE FROM %4$s d WHERE NOT d.m RETURNING d.o, d.s), '
                    '     kept AS (SELECT r.op, r.n, r.o, r.s FROM r UNION ALL SELECT ''D''::"char", NULL::%5$s, d.o, d.s FROM d), '
                    '     k AS (SELECT kept.*, kept.op = ''U'' AND %3$s AS same FROM kept) '
                    'INSERT INTO %2$s SELECT (x.r).*, x.del, x.old, x.s FROM ('
@@ -181,6 +271,7 @@ BEGIN
                    array_to_string(ARRAY(SELECT format('(kept.n).%1$I IS NOT DISTINCT FROM (kept.o).%1$I', k)
                                            FROM unnest(v_keycols) AS k), ' AND '),
                    v_dels, v_face);
+    EXECUTE format('DELETE FROM %s', v_dels);
 
     <<groups>>
     LOOP

@@ -104,8 +104,11 @@ BEGIN
     END LOOP;
     -- each row kept (tgsis.chunk_face_queue, its session table checked before the statement), all of them
     -- checked and written when the statement ends (tgsis.chunk_face_write): one rewrite per touched chunk
+    -- (its arguments: the row table, then the row key's columns, which it needs per row: no catalog query per row)
     EXECUTE format('CREATE TRIGGER tgsis_chunk_face INSTEAD OF INSERT OR UPDATE OR DELETE ON %s '
-                   'FOR EACH ROW EXECUTE FUNCTION tgsis.chunk_face_queue(%L)', v_face, p_table);
+                   'FOR EACH ROW EXECUTE FUNCTION tgsis.chunk_face_queue(%s)', v_face,
+                   (SELECT string_agg(quote_literal(a), ', ' ORDER BY o)
+                      FROM unnest(p_table || tgsis.chunk_row_key(p_table)) WITH ORDINALITY AS u(a, o)));
     EXECUTE format('CREATE TRIGGER tgsis_chunk_face_queue BEFORE INSERT OR UPDATE OR DELETE ON %s '
                    'FOR EACH STATEMENT EXECUTE FUNCTION tgsis.chunk_face_queue(%L)', v_face, p_table);
     EXECUTE format('CREATE TRIGGER tgsis_chunk_face_flush AFTER INSERT OR UPDATE OR DELETE ON %s '
