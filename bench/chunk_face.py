@@ -1,11 +1,13 @@
-"""The relational face over chunks (issue 40): one vertex by key and a 10,000-row UPDATE on a 1M-vertex object.
+"""The relational face over chunks (issue 40): one vertex by key, and 10,000-row writes on a 1M-vertex object.
 
 Versioning on, model 1 in chunks (the default); one object of ``--n`` vertices written by
 ``tgsis.write_chunk_rows``. Measured: one vertex by key through the face (``tgsis.vrtx``, the view) and
 through ``tgsis.vertex`` (one chunk by its primary key), ``tgsis.vertices`` of 1,000 ids spread over the
-object, and a 10,000-row ``UPDATE`` through the face (queued by the row trigger, written by one call of
-the writer). The baseline, in the same process: the same rows in a plain table with a primary key
-(``public.plain``), the same key read and the same UPDATE. This was tests/test_chunk_face.py's measuring
+object, and through the face (each row kept by the row trigger, all written by one call of the writer when
+the statement ends) a 10,000-row ``UPDATE``, a 5,000-row ``INSERT ... SELECT`` of new ids (5 new chunks)
+and a 10,000-row ``DELETE``. The baseline, in the same process: the same rows in a plain table with a
+primary key (``public.plain``), the same key read and the same statements; both end with the same rows
+(checked bit for bit). This was tests/test_chunk_face.py's measuring
 test until 2026-12-06; the test now checks the same on 20,000 vertices. Prints ``name: value`` lines.
 
     .venv/bin/python bench/chunk_face.py [--n 1000000]
@@ -58,27 +60,49 @@ def main() -> None:
         conn.commit()
         rows = min(10_000, n)
 
-        def update(table: str) -> float:
+        def statement(sql: str, table: str, want: int) -> float:
             start = time.perf_counter()
-            done = conn.execute(f"UPDATE {table} SET z = z + 1 WHERE geoid = 1 AND vrtxid < %s", (rows,)).rowcount
+            done = conn.execute(sql.format(t=table)).rowcount
             conn.commit()
-            assert done == rows
+            assert done == want, (sql, table, done)
             return time.perf_counter() - start
 
-        through_face, plain_update = update("tgsis.vrtx"), update("public.plain")
+        # each statement through the face, then the same statement on the plain table, in one run
+        update = f"UPDATE {{t}} SET z = z + 1 WHERE geoid = 1 AND vrtxid < {rows}"
+        through_face, plain_update = statement(update, "tgsis.vrtx", rows), statement(update, "public.plain", rows)
+        inserted = rows // 2
+        insert = f"INSERT INTO {{t}} SELECT 1, i, i, -i, 0.25 FROM generate_series({n}::bigint, {n + inserted - 1}) i"
+        face_insert = statement(insert, "tgsis.vrtx", inserted)
+        plain_insert = statement(insert, "public.plain", inserted)
+        delete = f"DELETE FROM {{t}} WHERE geoid = 1 AND vrtxid < {rows}"
+        face_delete, plain_delete = statement(delete, "tgsis.vrtx", rows), statement(delete, "public.plain", rows)
+        same = "SELECT geoid, vrtxid, float8send(x), float8send(y), float8send(z) FROM {t} ORDER BY 1, 2"
+        assert (
+            conn.execute(same.format(t="tgsis.vrtx")).fetchall()
+            == conn.execute(same.format(t="public.plain")).fetchall()
+        )
+        conn.commit()
         print(
             f"one vertex by key, {n}-vertex object: through the face {face * 1000:.1f} ms, tgsis.vertex "
             f"{function * 1000:.2f} ms, a plain table {plain * 1000:.2f} ms"
         )
         print(f"tgsis.vertices of {len(ids)} ids: {many * 1000:.1f} ms")
         print(f"{rows}-row UPDATE through the face {through_face:.2f} s, of the plain table {plain_update:.2f} s")
+        print(
+            f"{inserted}-row INSERT ... SELECT through the face {face_insert:.2f} s, into the plain table {plain_insert:.2f} s"
+        )
+        print(f"{rows}-row DELETE through the face {face_delete:.2f} s, of the plain table {plain_delete:.2f} s")
         print(f"face_one_vertex_ms: {face * 1000:.1f}")
         print(f"vertex_function_ms: {function * 1000:.2f}")
         print(f"face_one_vertex_vs_plain: {face / plain:.0f}")
         print(f"vertex_function_vs_plain: {function / plain:.1f}")
         print(f"vertices_1000_ids_ms: {many * 1000:.1f}")
         print(f"face_update_s: {through_face:.2f}")
-        print(f"face_update_vs_plain: {through_face / plain_update:.0f}")
+        print(f"face_update_vs_plain: {through_face / plain_update:.1f}")
+        print(f"face_insert_select_s: {face_insert:.2f}")
+        print(f"face_insert_select_vs_plain: {face_insert / plain_insert:.1f}")
+        print(f"face_delete_s: {face_delete:.2f}")
+        print(f"face_delete_vs_plain: {face_delete / plain_delete:.1f}")
 
 
 if __name__ == "__main__":

@@ -416,6 +416,26 @@ def test_roles_with_fewer_rights(db_dsn: str, conn: Conn) -> None:
         )
         assert _sqlstate(hostile, f"UPDATE tgsis.vrtx_face SET x = 8 WHERE geoid = {alpha} AND vrtxid = 0") == "42501"
         hostile.close()
+        # the same with the table of kept rows (the row trigger's): refused before the statement's first row
+        hostile = roles.connect("editor")
+        hostile.execute(f'CREATE TEMP TABLE tgsis_face_rows_{oid[0]} (op "char", n tgsis.vrtx_face, o tgsis.vrtx_face)')
+        for statement in (
+            f"INSERT INTO tgsis.vrtx_face VALUES ({alpha}, 60, 0, 0, 0)",
+            f"UPDATE tgsis.vrtx_face SET x = 8 WHERE geoid = {alpha} AND vrtxid = 0",
+            f"DELETE FROM tgsis.vrtx_face WHERE geoid = {alpha} AND vrtxid = 0",
+        ):
+            assert _sqlstate(hostile, statement) == "42501", statement
+        assert hostile.execute(f"SELECT count(*) FROM pg_temp.tgsis_face_rows_{oid[0]}").fetchone() == (0,)  # noqa: S608
+        hostile.close()
+        # and with the table of a DELETE's rows read
+        hostile = roles.connect("editor")
+        hostile.execute(f"CREATE TEMP TABLE tgsis_face_dels_{oid[0]} (o tgsis.vrtx_face)")
+        for statement in (
+            f"INSERT INTO tgsis.vrtx_face VALUES ({alpha}, 60, 0, 0, 0)",
+            f"DELETE FROM tgsis.vrtx_face WHERE geoid = {alpha} AND vrtxid = 0",
+        ):
+            assert _sqlstate(hostile, statement) == "42501", statement
+        hostile.close()
         face = _sqlstate(editor, f"INSERT INTO tgsis.vrtx_face VALUES ({beta}, 50, 0, 0, 0)")
         today = _sqlstate(editor, f"INSERT INTO tgsis.vrtx VALUES ({beta}, 50, 0, 0, 0)")
         assert face == "42501" and today == "42501", (face, today)

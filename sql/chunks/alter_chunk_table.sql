@@ -104,7 +104,8 @@ BEGIN
     SELECT c.relacl INTO v_grants FROM pg_class c WHERE c.oid = v_face;
     -- this session's own work tables of the face's writes (tgsis.chunk_face_write: of the face's row type, emptied
     -- at each statement's end) go with it; another session's block the drop (2BP01, reported as TG202 by the caller)
-    EXECUTE format('DROP TABLE IF EXISTS pg_temp.%I, pg_temp.%I', 'tgsis_face_now_' || v_face::oid, 'tgsis_face_queue_' || v_face::oid);
+    EXECUTE format('DROP TABLE IF EXISTS pg_temp.%I, pg_temp.%I, pg_temp.%I, pg_temp.%I', 'tgsis_face_now_' || v_face::oid,
+                   'tgsis_face_queue_' || v_face::oid, 'tgsis_face_rows_' || v_face::oid, 'tgsis_face_dels_' || v_face::oid);
     EXECUTE format('DROP VIEW %s', v_face);  -- (its triggers with it)
     EXECUTE format('DROP VIEW %s', tgsis.chunk_relation(p_table, '_chunk_rows'));
 

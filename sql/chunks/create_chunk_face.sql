@@ -12,9 +12,11 @@
 -- so it applies the class rights filter of the model tables itself, as a
 -- security barrier (tgsis.create_versioned_view does the same). Grants: those
 -- of today's relation tgsis.<table> when it exists (the view or table the
--- face will replace), else the storage's. Writes: INSTEAD OF triggers running
--- tgsis.chunk_face_write (each row; and after each UPDATE statement, the
--- flush of the queued rows), before each statement
+-- face will replace), else the storage's. Writes: an INSTEAD OF row trigger
+-- keeping each row (tgsis.chunk_face_queue) and, after each INSERT, UPDATE or
+-- DELETE statement, the flush of the kept rows (tgsis.chunk_face_write: one
+-- rewrite per touched chunk), before each statement tgsis.chunk_face_queue's
+-- check of the session's table of kept rows and
 -- tgsis.chunk_snapshot_check (40001 for a snapshot older than the chunk
 -- table's last rewrite, which it sees empty), and for versioned storage the
 -- write right's statement check (tgsis.view_write_check) as today's views
@@ -80,7 +82,7 @@ BEGIN
                    -- the switch has the face of one switched while versioned (tests/test_storage_default.py)
                    format('%s, stored in chunks (%s, docs/storage.md "The relational face"): the rows of the visible chunk versions '
                           '(those of the session''s version when versioned), '
-                          'written through INSTEAD OF triggers (tgsis.chunk_face_write)%s',
+                          'written through INSTEAD OF triggers (tgsis.chunk_face_queue, then tgsis.chunk_face_write per statement)%s',
                           coalesce(obj_description(v_storage, 'pg_class'), tgsis.chunk_relation(p_table, '')), v_chunk,
                           CASE WHEN v_reg.classname IS NULL THEN '; one vertex by key is read fastest by the keyed reads of model 1 (vertex, vertices)'
                                ELSE '' END));
@@ -100,9 +102,16 @@ BEGIN
                        CASE WHEN v_acl.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_acl.grantee)) END,
                        CASE WHEN v_acl.is_grantable THEN ' WITH GRANT OPTION' ELSE '' END);
     END LOOP;
+    -- each row kept (tgsis.chunk_face_queue, its session table checked before the statement), all of them
+    -- checked and written when the statement ends (tgsis.chunk_face_write): one rewrite per touched chunk
+    -- (its arguments: the row table, then the row key's columns, which it needs per row: no catalog query per row)
     EXECUTE format('CREATE TRIGGER tgsis_chunk_face INSTEAD OF INSERT OR UPDATE OR DELETE ON %s '
-                   'FOR EACH ROW EXECUTE FUNCTION tgsis.chunk_face_write(%L)', v_face, p_table);
-    EXECUTE format('CREATE TRIGGER tgsis_chunk_face_flush AFTER UPDATE ON %s '
+                   'FOR EACH ROW EXECUTE FUNCTION tgsis.chunk_face_queue(%s)', v_face,
+                   (SELECT string_agg(quote_literal(a), ', ' ORDER BY o)
+                      FROM unnest(p_table || tgsis.chunk_row_key(p_table)) WITH ORDINALITY AS u(a, o)));
+    EXECUTE format('CREATE TRIGGER tgsis_chunk_face_queue BEFORE INSERT OR UPDATE OR DELETE ON %s '
+                   'FOR EACH STATEMENT EXECUTE FUNCTION tgsis.chunk_face_queue(%L)', v_face, p_table);
+    EXECUTE format('CREATE TRIGGER tgsis_chunk_face_flush AFTER INSERT OR UPDATE OR DELETE ON %s '
                    'FOR EACH STATEMENT EXECUTE FUNCTION tgsis.chunk_face_write(%L)', v_face, p_table);
     -- a snapshot older than the chunk table's last rewrite sees it empty: its writes are refused (40001)
     EXECUTE format('CREATE TRIGGER tgsis_chunk_face_snapshot BEFORE INSERT OR UPDATE OR DELETE ON %s '
@@ -120,4 +129,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.create_chunk_face(text, text) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.create_chunk_face(text, text) IS
-    'create the view tgsis.<p_view or p_table> over the visible chunk versions of tgsis.<table>_chunk with exactly the row table''s columns (today''s visibility when versioned, the class rights filter, security_barrier, the grants of today''s relation), written through INSTEAD OF triggers (tgsis.chunk_face_write); TG200 without a chunk table, TG201 when the view exists';
+    'create the view tgsis.<p_view or p_table> over the visible chunk versions of tgsis.<table>_chunk with exactly the row table''s columns (today''s visibility when versioned, the class rights filter, security_barrier, the grants of today''s relation), written through INSTEAD OF triggers (each row kept by tgsis.chunk_face_queue, written per statement by tgsis.chunk_face_write); TG200 without a chunk table, TG201 when the view exists';

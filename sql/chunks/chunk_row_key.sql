@@ -1,0 +1,24 @@
+-- tgsis.chunk_row_key(table): the columns of a row's key in the face of a chunk table: the chunk table's
+-- key columns before revision, the chunk column (the local id) in place of chunk (e.g. {geoid, vrtxid}).
+-- The face's row trigger (tgsis.chunk_face_queue) gets them as its trigger arguments from
+-- tgsis.create_chunk_face, which asks here once, so that a row costs no catalog query; a face made before
+-- they were passed asks here per row.
+CREATE FUNCTION tgsis.chunk_row_key(p_table text)
+RETURNS text[]
+LANGUAGE sql
+STABLE
+PARALLEL SAFE
+SET search_path = pg_catalog, pg_temp
+AS $$
+    SELECT array_agg(CASE WHEN a.attname = 'chunk' THEN r.chunkcolumn ELSE a.attname::text END ORDER BY a.attnum)
+      FROM tgsis.chunk_registry(p_table) r
+      JOIN pg_attribute a ON a.attrelid = tgsis.chunk_relation(p_table, '_chunk')::regclass
+     WHERE a.attnum > 0
+       AND a.attnum < (SELECT b.attnum FROM pg_attribute b
+                        WHERE b.attrelid = tgsis.chunk_relation(p_table, '_chunk')::regclass AND b.attname = 'revision')
+$$;
+
+REVOKE ALL ON FUNCTION tgsis.chunk_row_key(text) FROM PUBLIC;
+
+COMMENT ON FUNCTION tgsis.chunk_row_key(text) IS
+    'the key columns of a row of the face of a chunk table (the chunk table''s key columns before revision, the chunk column in place of chunk): the row trigger''s arguments (tgsis.create_chunk_face)';
