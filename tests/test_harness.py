@@ -123,7 +123,7 @@ def test_model_2s_time_tables_follow_the_templates_storage_unless_forced(
     them in that storage, so the per-file swap of model 1 swaps them too; TGSIS_TEST_TIME_STORAGE forces every time
     table of models 2 to 5 (docs/testing.md). Models 3 to 5 stay rows unless forced."""
     with psycopg.connect(make_database(storage_templates(storage))) as conn:
-        got = dict(
+        got: dict[str, str] = dict(
             conn.execute(
                 "SELECT tablename, CASE WHEN tgsis.stored_in_chunks(tablename) THEN 'chunks' ELSE 'rows' END"
                 " FROM tgsis.model_tables WHERE model >= 2 AND chunkcolumn IS NOT NULL"
