@@ -99,7 +99,7 @@ def test_the_conversion_gives_the_bound_the_client_gives(db_dsn: str) -> None:
         conn.commit()
         conn.execute(
             "SELECT tgsis.store_in_chunks(tablename) FROM tgsis.model_tables"
-            " WHERE chunkdefault ORDER BY model, iudorder, tablename"
+            " WHERE chunkdefault AND NOT tgsis.stored_in_chunks(tablename) ORDER BY model, iudorder, tablename"
         )
         conn.commit()
         converted = _bounds(conn, geoid)

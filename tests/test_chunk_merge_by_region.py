@@ -33,7 +33,10 @@ from tgsis.testing import TestServer
 Conn = psycopg.Connection[Any]
 
 SIDE = 40  # 1,600 vertices (chunks 0 and 1), 3,042 triangles (chunks 0 to 2)
-CHUNKED = "SELECT tgsis.store_in_chunks(tablename) FROM tgsis.model_tables WHERE chunkdefault ORDER BY model, iudorder, tablename"
+CHUNKED = (
+    "SELECT tgsis.store_in_chunks(tablename) FROM tgsis.model_tables WHERE chunkdefault"
+    " AND NOT tgsis.stored_in_chunks(tablename) ORDER BY model, iudorder, tablename"
+)
 
 
 def grid_surface(side: int) -> tgsis.Surface:

@@ -122,8 +122,9 @@ def test_model1_tables_are_registered_for_chunks(conn: Conn) -> None:
         ("trgl", "trglid", ["vrtxid1", "vrtxid2", "vrtxid3"], 1024),
         ("vrtx", "vrtxid", [], 1024),
     ]
-    # model 2's time tables, model 3's triangles and node positions and the G-maps' darts and involutions (models 4
-    # and 5) are registered for chunks, not stored in them by default; the columns say what they are
+    # model 2's time tables are stored in chunks by default in a new database (as model 1's); model 3's triangles and
+    # node positions and the G-maps' darts and involutions (models 4 and 5) are registered for chunks, not stored in
+    # them by default; the columns say what they are
     assert conn.execute(
         "SELECT array_agg(tablename || ':' || chunkcolumn || ':' || chunkdefault ORDER BY tablename) FROM tgsis.model_tables"
         " WHERE model <> 1 AND chunkcolumn IS NOT NULL"
@@ -135,12 +136,12 @@ def test_model1_tables_are_registered_for_chunks(conn: Conn) -> None:
             "gmap_dart:dartid:false",
             "md_alpha:dartid:false",
             "md_dart:dartid:false",
-            "times_trgl:trglid:false",
-            "times_vrtx:vrtxid:false",
+            "times_trgl:trglid:true",
+            "times_vrtx:vrtxid:true",
         ],
     )
     assert conn.execute(
-        "SELECT bool_and(chunkdefault = (model = 1)) FROM tgsis.model_tables WHERE chunkcolumn IS NOT NULL"
+        "SELECT bool_and(chunkdefault = (model IN (1, 2))) FROM tgsis.model_tables WHERE chunkcolumn IS NOT NULL"
     ).fetchone() == (True,)
     for column in ("chunkcolumn", "chunkrefs", "chunksize", "chunkdefault"):
         assert conn.execute(

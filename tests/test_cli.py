@@ -30,7 +30,7 @@ def test_db_install_then_again_is_a_no_op(make_database: object, capsys: pytest.
         f"installed tgsis {tgsis.__version__} (sql)",
         "  created the extension(s) tgsis needs: cube",
         f"  ran the install script of tgsis {tgsis.__version__} (plain SQL: schema tgsis with its storage tables)",
-        "  stored in chunks: vrtx, point, segment, tetra, trgl (docs/storage.md)",  # the default storage of model 1
+        "  stored in chunks: vrtx, point, segment, tetra, trgl, times_trgl, times_vrtx (docs/storage.md)",  # models 1, 2
     ]
     assert main(["--dsn", dsn, "db", "install"]) == 0
     assert "already installed (sql): nothing to do" in capsys.readouterr().out

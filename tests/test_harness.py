@@ -11,7 +11,7 @@ import psycopg
 import pytest
 
 from tests.local_helpers import child_env
-from tgsis.testing import STORAGES, TestServer, default_storage, start_test_server, swapped_file
+from tgsis.testing import STORAGES, TestServer, default_storage, start_test_server, swapped_file, time_storage
 
 BAD_DSN = "host=/nonexistent-socket-dir port=1 dbname=x connect_timeout=2"
 
@@ -91,7 +91,7 @@ def test_a_run_without_server_fails_instead_of_skipping(tmp_path: Path) -> None:
 def _model1_storage(conn: psycopg.Connection[Any]) -> set[str]:
     """The storages of model 1's chunk tables in a database (one of them unless a test switched some)."""
     rows = conn.execute(
-        "SELECT tgsis.stored_in_chunks(tablename) FROM tgsis.model_tables WHERE chunkdefault"
+        "SELECT tgsis.stored_in_chunks(tablename) FROM tgsis.model_tables WHERE chunkdefault AND model = 1"
     ).fetchall()
     assert len(rows) == 5
     return {"chunks" if row[0] else "rows" for row in rows}
@@ -113,6 +113,25 @@ def test_the_mark_storage_gives_databases_of_that_storage(
         assert _model1_storage(other) == {storage}
     with psycopg.connect(make_database(storage_templates(storage))) as other:
         assert _model1_storage(other) == {storage}
+
+
+@pytest.mark.parametrize("storage", STORAGES)
+def test_model_2s_time_tables_follow_the_templates_storage_unless_forced(
+    storage: str, make_database: Any, storage_templates: Any
+) -> None:
+    """Model 2's time tables are chunks by default (chunkdefault, as model 1's): a template of either storage holds
+    them in that storage, so the per-file swap of model 1 swaps them too; TGSIS_TEST_TIME_STORAGE forces every time
+    table of models 2 to 5 (docs/testing.md). Models 3 to 5 stay rows unless forced."""
+    with psycopg.connect(make_database(storage_templates(storage))) as conn:
+        got: dict[str, str] = dict(
+            conn.execute(
+                "SELECT tablename, CASE WHEN tgsis.stored_in_chunks(tablename) THEN 'chunks' ELSE 'rows' END"
+                " FROM tgsis.model_tables WHERE model >= 2 AND chunkcolumn IS NOT NULL"
+            ).fetchall()
+        )
+    forced = time_storage()
+    assert got.pop("times_vrtx") == got.pop("times_trgl") == (forced or storage)
+    assert got and set(got.values()) == {forced or "rows"}, got
 
 
 @pytest.mark.storage("rows")

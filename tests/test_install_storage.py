@@ -118,7 +118,7 @@ def test_db_install_says_what_it_did(pg: TestServer, make_database: MakeDb, caps
         "  created the extension(s) tgsis needs: cube",
         f"  created the extension tgsis {tgsis.__version__} (CREATE EXTENSION tgsis VERSION '{tgsis.__version__}' CASCADE)",
         "  created the storage tables (SELECT tgsis.create_storage())",
-        "  stored in chunks: vrtx, point, segment, tetra, trgl (docs/storage.md)",  # the default (--storage rows)
+        "  stored in chunks: vrtx, point, segment, tetra, trgl, times_trgl, times_vrtx (docs/storage.md)",  # the default
     ]
 
 

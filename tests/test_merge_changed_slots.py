@@ -36,7 +36,7 @@ Conn = psycopg.Connection[Any]
 SIDE = 40  # 1,600 vertices (chunks 0 and 1), 3,042 triangles (chunks 0 to 2)
 CHUNKED = (
     "SELECT tgsis.store_in_chunks(tablename) FROM tgsis.model_tables WHERE chunkdefault"
-    " ORDER BY model, iudorder, tablename"
+    " AND NOT tgsis.stored_in_chunks(tablename) ORDER BY model, iudorder, tablename"
 )
 MIDDLE = [10 * SIDE + 10, 10 * SIDE + 11, 11 * SIDE + 10]
 EAST = [1024 + 7, 1024 + 8, 1100]

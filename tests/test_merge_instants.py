@@ -642,20 +642,17 @@ def test_random_disjoint_edits_at_random_instants_merge_into_exactly_the_union(
     for t in child_times:
         move(conn, child, series, t, child_ids, child_shift)
         expected[t] = shifted(expected[t], child_ids, child_shift)
+    # a shift that leaves every bit as it was (zero, or too small for the coordinates) changes no chunk: the object
+    # is then not changed in the child on chunks, where rows wrote new row versions (docs/storage.md, by design)
+    child_changed = any(expected[t].tobytes() != start[t].tobytes() for t in child_times)
+    rewrites = rewrites_same_values(conn, "times_vrtx")
+    conn.commit()
     for t in parent_times:
         move(conn, parent, series, t, parent_ids, parent_shift)
         expected[t] = shifted(expected[t], parent_ids, parent_shift)
     result = tgsis.merge_version(conn, child)
-
-    # merged when both sides changed the object; a move by a shift that leaves every value's bits as they were
-    # changes it on rows (a new row version), not on chunks (nothing written)
-    def changes(times: list[float], ids: list[int], shift: tuple[float, float, float]) -> bool:
-        return any(shifted(start[t], ids, shift).tobytes() != start[t].tobytes() for t in times)
-
-    both = rewrites_same_values(conn, "times_vrtx") or (
-        changes(child_times, child_ids, child_shift) and changes(parent_times, parent_ids, parent_shift)
-    )
-    assert [o.how for o in result.objects] == (["automatic"] if both else [])
+    hows = [o.how for o in result.objects]
+    assert hows == (["automatic"] if child_changed or rewrites else []), (hows, rewrites, child_changed)
     got = instants(conn, parent, series)
     assert {t: v[1].tobytes() for t, v in got.items()} == {t: v.tobytes() for t, v in expected.items()}
     assert all(v[2] == _cells() for v in got.values())

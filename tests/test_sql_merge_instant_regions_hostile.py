@@ -342,7 +342,14 @@ def _read_by(conn: Conn, run: Any) -> int:
     return sum(after[k] - before.get(k, 0) for k in after)
 
 
+@pytest.mark.storage("rows")  # the rows storage's reads (model 2's time tables take the template's storage)
 def test_the_psql_merge_of_a_one_vertex_edit_on_each_side_reads_no_more_rows_than_the_python_merge(conn: Conn) -> None:
+    if conn.execute("SELECT tgsis.stored_in_chunks('times_vrtx')").fetchone() == (True,):
+        pytest.skip(
+            "measures rows (TGSIS_TEST_TIME_STORAGE=chunks forced chunks): in chunks the psql merge's change read is "
+            "every slot of a changed chunk, and read 15,903 tuples against the Python merge's 14,271 (PG15, "
+            "2026-12-07; docs/storage.md, 'Snapshots at t')"
+        )
     _grid_edited(conn, 100)
     python = _read_by(conn, lambda: tgsis.merge_version(conn, "e1"))
     psql = _read_by(conn, lambda: conn.execute("SELECT tgsis.merge_version('e1')"))

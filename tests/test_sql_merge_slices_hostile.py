@@ -433,9 +433,26 @@ def test_a_negative_vertex_id_a_psql_user_stored_merges_exactly_as_in_python_mod
 
 
 def test_a_negative_vertex_id_at_an_instant_merges_exactly_as_in_python(conn: Conn, horizons: int) -> None:
+    """On rows the version's negative ids merge as any other; chunks refuse them by design (docs/storage.md, "What
+    differs from rows"): the INSERT is refused TG100, nothing written."""
     geoid = horizons
     tgsis.create_version(conn, "e1")
     conn.commit()
+    if conn.execute("SELECT tgsis.stored_in_chunks('times_vrtx')").fetchone() == (True,):
+        before = everything(conn)
+        conn.commit()
+        with pytest.raises(psycopg.Error) as refused:
+            _sql(
+                conn,
+                "e1",
+                "INSERT INTO tgsis.times_vrtx (geoid, times, vrtxid, x, y, z) VALUES (%s, 2, -1, 1.5, 2.5, 3.5)",
+                (geoid,),
+            )
+        assert refused.value.sqlstate == "TG100", refused.value
+        conn.rollback()
+        assert everything(conn) == before
+        conn.commit()
+        return
     _sql(
         conn,
         "e1",
@@ -556,7 +573,11 @@ def test_object_merge_refusal_is_not_public_and_an_editor_still_merges_in_psql(c
         assert row is not None and int(row[0]) == theirs[1]
         after = everything(conn)
         conn.commit()
-        for table in ("tgsis.times_vrtx_ver", "tgsis.times_ver", "public.horizons_cellpros_ver"):
+        tables = conn.execute(  # (the time table's storage: times_vrtx_ver, or its chunk table: docs/storage.md)
+            "SELECT tgsis.storage_table('tgsis', t) FROM unnest(ARRAY['times_vrtx', 'times']) t"
+        ).fetchall()
+        conn.commit()
+        for table in [str(t) for (t,) in tables] + ["public.horizons_cellpros_ver"]:
             assert after[table] == theirs[2][table], table
 
 

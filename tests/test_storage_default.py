@@ -27,7 +27,15 @@ from tgsis.testing import TestServer
 MakeDb = Callable[..., str]
 Conn = psycopg.Connection[Any]
 
-CHUNKED = ["vrtx", "point", "segment", "tetra", "trgl"]  # model 1's tables registered for chunks, in install order
+CHUNKED = [
+    "vrtx",
+    "point",
+    "segment",
+    "tetra",
+    "trgl",
+    "times_trgl",
+    "times_vrtx",
+]  # chunkdefault (model 1, model 2), install order
 
 
 def _storages(conn: Conn) -> dict[str, bool]:

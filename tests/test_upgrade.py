@@ -62,6 +62,12 @@ SELECT tgsis.save_revision('survey2');
 """
 
 
+# model 2's time tables are stored in chunks by default in a new database (chunkdefault), but an upgrade keeps an
+# existing database's where they are, as rows (docs/storage.md, "The storage switch"): what a fresh install
+# switches back to be compared with an upgraded database
+_KEPT = ("times_trgl", "times_vrtx")
+_KEPT_AS_ROWS = "SELECT tgsis.store_in_rows(t) FROM unnest(ARRAY['times_trgl', 'times_vrtx']) t"
+
 # the objects noted as changed per revision and table (tgsis.revision_objects), new in 0.3.0
 _NOTES = "SELECT DISTINCT revision, schemaname, tablename, objectkey FROM tgsis.revision_objects ORDER BY 1, 2, 3, 4"
 
@@ -163,6 +169,8 @@ def test_upgraded_database_equals_a_fresh_install(
         got_notes = conn.execute(_NOTES).fetchall()
     with psycopg.connect(fresh) as conn:
         tgsis.install(conn, method=method)  # type: ignore[arg-type]
+        # an upgraded database keeps its time tables as rows (docs/storage.md): a fresh one keeping them so too
+        conn.execute(_KEPT_AS_ROWS)
         conn.execute(_USE)
         conn.commit()
         want = _objects(conn)
@@ -659,3 +667,77 @@ def test_a_table_that_cannot_switch_stays_rows_with_a_warning_and_the_upgrade_go
         conn.execute("SELECT tgsis.store_in_chunks('point')")
         conn.commit()
         assert _chunked(conn)["point"] and _every_set(conn) == before
+
+
+# ------------------------------------------------------------------ model 2's time tables: new installs only
+
+# a surface known at two instants in the 0.2.0 database, in SQL both versions understand; -0.0 and a subnormal
+_INSTANTS = """
+SELECT tgsis.register_feature_class('layer', 'SURFACE', p_time_model => 'INSTANTS');
+WITH g AS (SELECT tgsis.new_geometry('SURFACE', 'moving', ARRAY[0, 0, 0, 1, 1, 1]::float8[], 3, 1,
+                                     p_timemodel => 'INSTANTS') AS geoid),
+     t AS (INSERT INTO tgsis.times SELECT geoid, ts FROM g, unnest(ARRAY[0.0, 2.5]) ts),
+     v AS (INSERT INTO tgsis.times_vrtx SELECT geoid, ts, i, i % 2, -0.0, ts * 4.9e-324 FROM g,
+                 unnest(ARRAY[0.0, 2.5]) ts, generate_series(0, 2) i),
+     c AS (INSERT INTO tgsis.times_trgl SELECT geoid, ts, 0, 0, 1, 2 FROM g, unnest(ARRAY[0.0, 2.5]) ts)
+INSERT INTO public.layer (_geoid) SELECT geoid FROM g;
+"""
+_INSTANT_READS = (
+    "SELECT geoid, times, vrtxid, float8send(x), float8send(y), float8send(z) FROM tgsis.times_vrtx ORDER BY 1, 2, 3",
+    "SELECT geoid, times, trglid, vrtxid1, vrtxid2, vrtxid3 FROM tgsis.times_trgl ORDER BY 1, 2, 3",
+)
+
+
+@pytest.mark.parametrize("method", ["extension", "sql"])
+def test_the_upgrade_keeps_model_2s_time_tables_as_rows_and_a_new_install_stores_them_in_chunks(
+    method: str, pg: TestServer, make_database: MakeDb, tmp_path: Path
+) -> None:
+    """Only new installs get chunks for times_vrtx / times_trgl; an upgraded database keeps its rows, says so,
+    reads and writes them as before, and moves them when asked (tgsis.store_in_chunks), bit for bit."""
+    _upgrade_route(method, pg)
+    with psycopg.connect(make_database()) as conn:
+        tgsis.install(conn, method=method, sources=_frozen(tmp_path, OLD))  # type: ignore[arg-type]
+        conn.execute(_INSTANTS)
+        conn.commit()
+        before = [conn.execute(q).fetchall() for q in _INSTANT_READS]
+        assert len(before[0]) == 6 and len(before[1]) == 2
+        conn.commit()
+        if method == "extension":
+            conn.execute("ALTER EXTENSION tgsis UPDATE")
+            steps: list[str] = []
+        else:
+            result = tgsis.install(conn)
+            assert result.action == "upgraded"
+            steps = list(result.steps)
+        conn.commit()
+        registry = conn.execute(
+            "SELECT tablename, chunkdefault, tgsis.stored_in_chunks(tablename) FROM tgsis.model_tables"
+            " WHERE model = 2 AND chunkcolumn IS NOT NULL ORDER BY 1"
+        ).fetchall()
+        assert registry == [(t, True, False) for t in _KEPT], "registered as a fresh install, kept as rows"
+        assert conn.execute("SELECT to_regclass('tgsis.times_vrtx_chunk')").fetchone() == (None,)
+        assert _chunked(conn) == dict.fromkeys(_CHUNKED, True), "model 1 is moved all the same"
+        if method == "sql":
+            assert any(
+                s.startswith("kept as rows: times_trgl, times_vrtx (an upgrade moves model 1 only") for s in steps
+            )
+            assert not any("the upgrade's warnings say why" in s for s in steps), steps
+        assert [conn.execute(q).fetchall() for q in _INSTANT_READS] == before
+        # written after the upgrade, on rows; then moved when asked, every bit kept
+        conn.execute("UPDATE tgsis.times_vrtx SET z = 7 WHERE vrtxid = 1 AND times = 2.5")
+        conn.commit()
+        after = [conn.execute(q).fetchall() for q in _INSTANT_READS]
+        assert after != before
+        conn.execute("SELECT tgsis.store_in_chunks(t) FROM unnest(ARRAY['times_vrtx', 'times_trgl']) t")
+        conn.commit()
+        assert conn.execute(
+            "SELECT bool_and(tgsis.stored_in_chunks(t)) FROM unnest(ARRAY['times_vrtx', 'times_trgl']) t"
+        ).fetchone() == (True,)
+        assert [conn.execute(q).fetchall() for q in _INSTANT_READS] == after
+    with psycopg.connect(make_database()) as conn:
+        tgsis.install(conn, method=method)  # type: ignore[arg-type]
+        conn.commit()
+        assert conn.execute(
+            "SELECT array_agg(tablename ORDER BY tablename) FROM tgsis.model_tables"
+            " WHERE model = 2 AND tgsis.stored_in_chunks(tablename)"
+        ).fetchone() == (list(_KEPT),), "a new install stores model 2's time tables in chunks"

@@ -87,7 +87,7 @@ COMMENT ON COLUMN tgsis.model_tables.chunkrefs IS
 COMMENT ON COLUMN tgsis.model_tables.chunksize IS
     'ids per chunk (a power of two, 64..16384: holes number slots as smallint; 1024 today); NULL when chunkcolumn is NULL';
 COMMENT ON COLUMN tgsis.model_tables.chunkdefault IS
-    'stored in chunks by default: switched by tgsis.create_storage and the upgrade unless tgsis.storage is rows (model 1''s); a table registered for chunks without it stays rows until tgsis.store_in_chunks (model 2''s time tables)';
+    'stored in chunks by default in a new database: switched by tgsis.create_storage unless tgsis.storage is rows (model 1''s tables, model 2''s time tables); the upgrade from 0.2.0 switches model 1''s only, an upgraded database keeps its time tables as rows; a table registered for chunks without it stays rows until tgsis.store_in_chunks (model 3''s, the G-maps'')';
 
 -- the geometry core: one tgsis.geometry row per stored object of every model
 INSERT INTO tgsis.data_models (model, name, timemodel, create_function, description)

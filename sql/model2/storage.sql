@@ -83,8 +83,9 @@ VALUES (2, 'surfaces at instants', 'INSTANTS', '{SURFACE}',
         'surfaces known at instants t0 < t1 < ..., constant in between (a shape per instant)',
         'merge_instants_by_slice');
 -- (the vertices and triangles at an instant are registered for chunks, keyed (geoid, times, chunk): docs/storage.md,
--- "Snapshots at t"; stored as rows until tgsis.store_in_chunks switches them: chunkdefault false)
+-- "Snapshots at t"; stored in chunks by default in a new database, as model 1 is (chunkdefault: tgsis.create_storage
+-- switches them unless tgsis.storage is rows); an upgraded database keeps its existing time tables as rows)
 INSERT INTO tgsis.model_tables (tablename, model, iudorder, description, chunkcolumn, chunkrefs, chunksize, chunkdefault) VALUES
     ('times',      2, 1, 'an instant at which a surface is known', NULL, '{}', NULL, false),
-    ('times_vrtx', 2, 2, 'a vertex of a surface at one of its instants', 'vrtxid', '{}', 1024, false),
-    ('times_trgl', 2, 2, 'a triangle of a surface at one of its instants', 'trglid', '{vrtxid1,vrtxid2,vrtxid3}', 1024, false);
+    ('times_vrtx', 2, 2, 'a vertex of a surface at one of its instants', 'vrtxid', '{}', 1024, true),
+    ('times_trgl', 2, 2, 'a triangle of a surface at one of its instants', 'trglid', '{vrtxid1,vrtxid2,vrtxid3}', 1024, true);

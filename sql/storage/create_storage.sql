@@ -14,7 +14,7 @@
 -- A model whose tables are all there is skipped, so the function also serves an
 -- upgrade that registers a new model: its tables are created and granted, and
 -- the geotype/time-model check of tgsis.geometry follows the registry.
--- The tables registered for chunks by default (tgsis.model_tables.chunkdefault: model 1's)
+-- The tables registered for chunks by default (tgsis.model_tables.chunkdefault: model 1's, model 2's time tables)
 -- are switched to chunks right after they are created, empty, when
 -- tgsis.chosen_storage() says chunks (the default; the setting tgsis.storage =
 -- rows keeps rows): docs/storage.md, "The storage switch".

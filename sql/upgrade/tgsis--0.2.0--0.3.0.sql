@@ -114,12 +114,12 @@ ALTER TABLE tgsis.model_tables
     ADD COLUMN chunkdefault boolean NOT NULL DEFAULT false,
     ADD CONSTRAINT model_tables_chunkdefault CHECK (NOT chunkdefault OR chunkcolumn IS NOT NULL);
 COMMENT ON COLUMN tgsis.model_tables.chunkdefault IS
-    'stored in chunks by default: switched by tgsis.create_storage and the upgrade unless tgsis.storage is rows (model 1''s); a table registered for chunks without it stays rows until tgsis.store_in_chunks (model 2''s time tables)';
+    'stored in chunks by default in a new database: switched by tgsis.create_storage unless tgsis.storage is rows (model 1''s tables, model 2''s time tables); the upgrade from 0.2.0 switches model 1''s only, an upgraded database keeps its time tables as rows; a table registered for chunks without it stays rows until tgsis.store_in_chunks (model 3''s, the G-maps'')';
 UPDATE tgsis.model_tables t SET chunkcolumn = c.chunkcolumn, chunkrefs = c.chunkrefs, chunksize = 1024, chunkdefault = c.dflt
   FROM (VALUES ('vrtx', 'vrtxid', '{}'::text[], true), ('point', 'pointid', '{vrtxid1}', true),
                ('segment', 'segid', '{vrtxid1,vrtxid2}', true), ('trgl', 'trglid', '{vrtxid1,vrtxid2,vrtxid3}', true),
                ('tetra', 'tetraid', '{vrtxid1,vrtxid2,vrtxid3,vrtxid4}', true),
-               ('times_vrtx', 'vrtxid', '{}', false), ('times_trgl', 'trglid', '{vrtxid1,vrtxid2,vrtxid3}', false),
+               ('times_vrtx', 'vrtxid', '{}', true), ('times_trgl', 'trglid', '{vrtxid1,vrtxid2,vrtxid3}', true),
                ('d4dtrgl', 'trglid', '{nodeid1,nodeid2,nodeid3}', false), ('d4dvrtx', 'nodeid', '{}', false),
                ('gmap_dart', 'dartid', '{nodeid}', false), ('gmap_alpha', 'dartid', '{dartid2}', false),
                ('md_dart', 'dartid', '{vrtxid}', false), ('md_alpha', 'dartid', '{dartid2}', false))
@@ -368,6 +368,9 @@ $keys$;
 -- WARNING naming it and the way to switch later: partitioned storage (TG100), or a layout chunks do not
 -- hold (TG100), or a user's view over it (PostgreSQL's 2BP01); the upgrade goes on. What the switch makes
 -- is made at run time in a fresh install (tgsis.create_storage): not extension members.
+-- Model 2's time tables (times_vrtx, times_trgl) are chunkdefault too (a new database stores them in
+-- chunks), but an upgraded database keeps its existing time tables where they are, as rows: only model 1's
+-- tables are switched here (tgsis.store_in_chunks('times_vrtx') etc. moves them later, docs/storage.md).
 DO $chunks$
 DECLARE
     v_extension oid := (SELECT oid FROM pg_catalog.pg_extension WHERE extname = 'tgsis');
@@ -383,7 +386,8 @@ BEGIN
     v_members := ARRAY(SELECT d.classid::oid::text || ':' || d.objid::text FROM pg_catalog.pg_depend d
                         WHERE d.deptype = 'e' AND d.refobjid = v_extension);
     FOR v_table IN SELECT t.tablename FROM tgsis.model_tables t
-                    WHERE t.chunkdefault AND to_regclass(format('tgsis.%I', t.tablename)) IS NOT NULL
+                    WHERE t.chunkdefault AND t.model = 1  -- model 2's time tables (chunkdefault) stay rows here
+                      AND to_regclass(format('tgsis.%I', t.tablename)) IS NOT NULL
                     ORDER BY t.model, t.iudorder, t.tablename LOOP
         CONTINUE WHEN tgsis.stored_in_chunks(v_table);
         BEGIN

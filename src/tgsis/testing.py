@@ -357,21 +357,28 @@ def pytest_configure(config: pytest.Config) -> None:
     )
 
 
-def time_storage() -> Literal["rows", "chunks"]:
-    """The storage of the time models' tables registered for chunks in the templates: ``$TGSIS_TEST_TIME_STORAGE``.
+def time_storage() -> Literal["rows", "chunks"] | None:
+    """The storage forced on the time models' tables in the templates: ``$TGSIS_TEST_TIME_STORAGE``, else ``None``.
 
-    Model 2's times_vrtx and times_trgl, model 3's d4dtrgl and d4dvrtx, the G-maps' gmap_dart, gmap_alpha, md_dart
-    and md_alpha (models 4 and 5): every table ``tgsis.model_tables`` registers for chunks but not by default.
+    The tables of models 2 to 5 registered for chunks (``tgsis.model_tables.chunkcolumn``): model 2's
+    times_vrtx and times_trgl, model 3's d4dtrgl and d4dvrtx, the G-maps' gmap_dart, gmap_alpha, md_dart
+    and md_alpha.
 
-    ``rows`` (the default, the product's) or ``chunks``: the templates' tables registered for chunks but not by
-    default (``tgsis.model_tables.chunkdefault``) are then switched by ``tgsis.store_in_chunks`` after the install.
+    ``None`` (unset, what ``make test`` runs): the templates as the install leaves them. Model 2's time tables
+    are stored in chunks by default (``chunkdefault``) as model 1's are, so they follow the template's storage
+    (:func:`default_storage`: under ``$TGSIS_TEST_STORAGE_BY_FILE`` every other file takes the other one, the
+    same registry, :func:`swapped_file`); models 3 to 5 stay rows. ``rows`` or ``chunks``: every one of those
+    tables is switched to that storage after the install (``tgsis.store_in_rows`` / ``tgsis.store_in_chunks``),
+    whatever the template's model 1.
 
     Raises
     ------
     pytest.UsageError
         ``$TGSIS_TEST_TIME_STORAGE`` names no storage of :data:`STORAGES`.
     """
-    value = os.environ.get("TGSIS_TEST_TIME_STORAGE") or "rows"
+    value = os.environ.get("TGSIS_TEST_TIME_STORAGE") or None
+    if value is None:
+        return None
     if value not in STORAGES:
         raise pytest.UsageError(f"TGSIS_TEST_TIME_STORAGE={value!r} names no storage: use one of {', '.join(STORAGES)}")
     return "chunks" if value == "chunks" else "rows"
@@ -380,13 +387,21 @@ def time_storage() -> Literal["rows", "chunks"]:
 def _install_template(conn: psycopg.Connection[Any], method: Literal["extension", "sql"], storage: str) -> str:
     """Install tgsis into a template database with model 1 stored in ``storage``; the route taken.
 
-    The tables registered for chunks but not by default (models 2 to 5) are stored as :func:`time_storage` says.
+    Model 2's time tables (registered for chunks by default) take ``storage`` too; the time models' tables are
+    then switched as :func:`time_storage` says, when it says.
     """
     route = install(conn, method=method, storage="rows" if storage == "rows" else "chunks").method
-    if time_storage() == "chunks":
+    forced = time_storage()
+    if forced is not None:
         conn.execute(
-            "SELECT tgsis.store_in_chunks(tablename) FROM tgsis.model_tables"
-            " WHERE chunkcolumn IS NOT NULL AND NOT chunkdefault ORDER BY model, iudorder, tablename"
+            sql.SQL(
+                "SELECT tgsis.{}(tablename) FROM tgsis.model_tables"
+                " WHERE model >= 2 AND chunkcolumn IS NOT NULL AND tgsis.stored_in_chunks(tablename) = {}"
+                " ORDER BY model, iudorder, tablename"
+            ).format(
+                sql.Identifier("store_in_chunks" if forced == "chunks" else "store_in_rows"),
+                sql.Literal(forced == "rows"),
+            )
         )
         conn.commit()
     return route
@@ -511,7 +526,11 @@ def pytest_terminal_summary(terminalreporter: Any) -> None:
         f" (model 1 in: {', '.join(_SESSION.get('storages', [])) or 'no template made'}; default storage: "
         f"{default_storage()}"
         + (", the other one for every other file" if os.environ.get("TGSIS_TEST_STORAGE_BY_FILE") == "1" else "")
-        + ("; models 2 to 5's tables registered for chunks in chunks" if time_storage() == "chunks" else "")
+        + (
+            f"; models 2 to 5's tables registered for chunks in {time_storage()} (TGSIS_TEST_TIME_STORAGE)"
+            if time_storage() is not None
+            else "; model 2's time tables with model 1"
+        )
         + "); CREATE EXTENSION tgsis: "
         + ("available" if server.extension_files is None else f"NOT available ({server.extension_files})")
     )

@@ -407,20 +407,31 @@ def _storage_steps(conn: psycopg.Connection[Any], storage: Storage) -> list[str]
         "SELECT array_agg(t.tablename::text ORDER BY t.model, t.iudorder, t.tablename)"
         "         FILTER (WHERE tgsis.stored_in_chunks(t.tablename)),"
         "       array_agg(t.tablename::text ORDER BY t.model, t.iudorder, t.tablename)"
-        "         FILTER (WHERE NOT tgsis.stored_in_chunks(t.tablename))"
-        # the tables stored in chunks by default (model 1's), and any other switched by hand (model 2's time tables)
+        "         FILTER (WHERE NOT tgsis.stored_in_chunks(t.tablename) AND t.model = 1),"
+        "       array_agg(t.tablename::text ORDER BY t.model, t.iudorder, t.tablename)"
+        "         FILTER (WHERE NOT tgsis.stored_in_chunks(t.tablename) AND t.model <> 1)"
+        # the tables stored in chunks by default (model 1's, model 2's time tables), and any other switched by hand
         "  FROM tgsis.model_tables t"
         " WHERE t.chunkdefault OR (t.chunkcolumn IS NOT NULL AND tgsis.stored_in_chunks(t.tablename))"
     ).fetchone()
     if row is None:
         return []
-    chunked, rows = list(row[0] or []), list(row[1] or [])
+    chunked, rows, kept = list(row[0] or []), list(row[1] or []), list(row[2] or [])
     steps = []
     if chunked:
         steps.append(f"stored in chunks: {', '.join(chunked)} (docs/storage.md)")
+    if storage == "rows":
+        rows += kept
+        kept = []
     if rows:
         why = "storage='rows'" if storage == "rows" else "the upgrade's warnings say why"
         steps.append(f"stored as rows: {', '.join(rows)} ({why})")
+    if kept:
+        # an upgraded database keeps its time tables where they were (docs/storage.md, "The storage switch")
+        steps.append(
+            f"kept as rows: {', '.join(kept)} (an upgrade moves model 1 only;"
+            " SELECT tgsis.store_in_chunks(table) moves the others, docs/storage.md)"
+        )
     return steps
 
 
