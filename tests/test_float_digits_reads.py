@@ -279,3 +279,35 @@ def test_an_unsolved_region_at_an_instant_from_1e15_on_is_named_as_python_names_
     named = f"region 0 at geometry instant {times[at]!r} of the period starting at {times[0]!r} unsolved"
     assert named in theirs[2], theirs  # the Python merge's name
     assert named in mine[2], mine  # psql's
+
+
+@pytest.mark.parametrize("digits", DIGITS)
+def test_the_instant_and_period_writers_name_times_exactly(conn: Conn, stepped: int, digits: int) -> None:
+    """``add_instant``'s, ``delete_instant``'s and ``delete_period``'s messages name an instant as it is (0.1 + 0.2
+    is 0.30000000000000004, not 0.3, which is another instant), whatever the session prints; nothing changed."""
+    fc = tgsis.create_feature_class(conn, "moving", "SURFACE", time_model="EVOLVING")
+    starts = [0.1, 0.1 + 0.2, 1.0]
+    moving = tgsis.insert_feature(conn, fc, evolving(np.random.default_rng(42), starts))
+    one = series(np.random.default_rng(43), [0.1 + 0.2], with_properties=True)
+    one = type(one)(one.times, one.surfaces, properties={"throw": np.array([1 / 3])}, name=one.name)
+    single = tgsis.insert_feature(conn, "stepped", one, {"depth": 1.0})
+    conn.commit()
+    _low_digits(conn, digits)
+
+    def refusal(call: str, *params: Any) -> psycopg.Error:
+        with pytest.raises(psycopg.Error) as refused:
+            conn.execute(call, params)
+        conn.rollback()
+        return refused.value
+
+    exact = "0.30000000000000004"
+    added = refusal("SELECT tgsis.add_instant(%s, %s)", stepped, 0.1 + 0.2)
+    assert added.sqlstate == "TG201" and f"instant {exact} already" in str(added), added
+    only = refusal("SELECT tgsis.delete_instant(%s, %s)", single, 0.1 + 0.2)
+    assert only.sqlstate == "TG202" and f"instant {exact} is the only one" in str(only), only
+    middle = refusal("SELECT tgsis.delete_period(%s, %s)", moving, 0.1 + 0.2)
+    assert middle.sqlstate == "TG202" and f"period from {exact} " in str(middle), middle
+    assert f"0.1, {exact}, 1" in (middle.diag.message_detail or ""), middle.diag.message_detail
+    # nothing changed, and the session's own setting is as it was
+    assert conn.execute("SELECT count(*) FROM tgsis.timem WHERE geoid = %s", (moving,)).fetchone() == (3,)
+    assert conn.execute("SHOW extra_float_digits").fetchone() == (str(digits),)

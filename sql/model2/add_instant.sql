@@ -2,6 +2,7 @@
 CREATE FUNCTION tgsis.add_instant(p_geoid bigint, p_t double precision)
 RETURNS void
 LANGUAGE plpgsql
+SET extra_float_digits = 1  -- its messages name instants exactly, whatever the session's setting
 AS $$
 BEGIN
     PERFORM tgsis.plain_write_check('tgsis', 'times');  -- not "in" a version while features are plain

@@ -6,6 +6,7 @@
 CREATE FUNCTION tgsis.delete_instant(p_geoid bigint, p_t double precision)
 RETURNS boolean
 LANGUAGE plpgsql
+SET extra_float_digits = 1  -- its messages name instants exactly, whatever the session's setting
 AS $$
 DECLARE
     v_class tgsis.catalog;

@@ -10,6 +10,7 @@
 CREATE FUNCTION tgsis.delete_period(p_geoid bigint, p_timem double precision)
 RETURNS boolean
 LANGUAGE plpgsql
+SET extra_float_digits = 1  -- its messages name instants exactly, whatever the session's setting
 AS $$
 DECLARE
     v_first double precision;
