@@ -500,8 +500,8 @@ def test_pg_dump_and_restore_keep_the_property_chunks(
         assert copy.execute(
             "SELECT facies FROM public.layer_cellpros WHERE _geoid = %s AND _idx = 9", (geoid,)
         ).fetchone() == (77,)
-        copy.close()
         with psycopg.connect(dsn) as again:
+            close_and_wait_gone(copy, again)  # its face work tables are dropped as its backend exits
             assert again.execute("SELECT tgsis.store_class_in_rows('layer')").fetchone() == (len(before),)
             again.commit()
 
