@@ -45,28 +45,7 @@ BEGIN
                            'and of the property tables of classes switched by tgsis.store_class_in_chunks.',
                   HINT = 'write the rows of a table stored as rows through its view or storage';
     END IF;
-    IF cardinality(tgsis.chunk_key(p_table)) <> 1 THEN
-        -- (an object's chunks are keyed by more than the object here: model 2's (geoid, times, chunk))
-        RAISE EXCEPTION 'tgsis.% is chunked by (%, chunk): tgsis.% writes the chunks of tables keyed by the object alone',
-                        quote_ident(p_table), array_to_string(tgsis.chunk_key(p_table), ', '), 'object_chunks_stage'
-            USING ERRCODE = 'TG100',
-                  HINT = format('write its rows through the face tgsis.%I or tgsis.insert_chunk_rows', p_table);
-    END IF;
-    -- (a model table with columns of role 'value', a G-map dart's acellid and positive: model 1's client encodes no
-    -- such arrays, which would be left NULL; a class's property table is all 'value's, encoded by its own client path)
-    -- (a class's vector property: the client has no encoding of its 2-D arrays, which would be left NULL)
-    IF EXISTS (SELECT FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'vector') THEN
-        RAISE EXCEPTION '% has vector properties, which tgsis.% does not write: %', p_table, 'object_chunks_stage',
-                        (SELECT string_agg(c.name, ', ' ORDER BY c.colorder) FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'vector')
-            USING ERRCODE = 'TG100',
-                  HINT = 'write its rows through the face or tgsis.write_property_rows';
-    END IF;
-    IF v_reg.classname IS NULL AND EXISTS (SELECT FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'value') THEN
-        RAISE EXCEPTION 'tgsis.% has columns tgsis.% does not write: %', quote_ident(p_table), 'object_chunks_stage',
-                        (SELECT string_agg(c.name, ', ' ORDER BY c.colorder) FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'value')
-            USING ERRCODE = 'TG100',
-                  HINT = format('write its rows through the face tgsis.%I or tgsis.insert_chunk_rows', p_table);
-    END IF;
+    PERFORM tgsis.client_chunks_check(p_table, 'object_chunks_stage');  -- TG100: keys, vector properties, value columns
     v_stage := format('pg_temp.%I', 'tgsis_object_chunks_'
                                     || CASE WHEN v_reg.classname IS NULL THEN p_table ELSE tgsis.chunk_table_of(p_table)::oid::text END);
     v_cols := array_to_string(ARRAY[quote_ident(v_reg.keycolumn), 'chunk', 'revision', 'holes']
