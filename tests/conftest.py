@@ -235,9 +235,11 @@ class BuiltOnce(Protocol):
 
 
 class BuiltOnceByStorage(Protocol):
-    """The ``built_once_by_storage`` fixture: ``get(storage, name, build=None) -> (database, value)``."""
+    """The ``built_once_by_storage`` fixture: ``get(storage, name, build=None, time=None) -> (database, value)``."""
 
-    def __call__(self, storage: str, name: str, build: Callable[[Conn], int] | None = None, /) -> tuple[str, int]: ...
+    def __call__(
+        self, storage: str, name: str, build: Callable[[Conn], int] | None = None, /, time: str | None = None
+    ) -> tuple[str, int]: ...
 
 
 # fixture name -> the set-up it gives, built on a connection (committed) and returning a value (a geoid)
@@ -252,25 +254,29 @@ _BUILT_ONCE: dict[str, Callable[[Conn], int]] = {
 
 
 @pytest.fixture(scope="session")
-def built_once_by_storage(pg: TestServer, storage_templates: Callable[[str], str]) -> Iterator[BuiltOnceByStorage]:
-    """``get(storage, name, build=None) -> (database, value)``: :func:`built_once`'s set-ups, per storage."""
+def built_once_by_storage(pg: TestServer, storage_templates: Callable[..., str]) -> Iterator[BuiltOnceByStorage]:
+    """``get(storage, name, build=None, time=None) -> (database, value)``: :func:`built_once`'s set-ups, per
+    template (model 1's storage, model 2's time tables': ``tgsis.testing.storage_templates``)."""
     built: dict[tuple[str, str], tuple[str, int]] = {}
     with contextlib.ExitStack() as stack:
 
-        def get(storage: str, name: str, build: Callable[[Conn], int] | None = None) -> tuple[str, int]:
-            if (storage, name) not in built:
-                database, dsn = stack.enter_context(pg.database("tgsis_once", storage_templates(storage)))
+        def get(
+            storage: str, name: str, build: Callable[[Conn], int] | None = None, /, time: str | None = None
+        ) -> tuple[str, int]:
+            template = storage_templates(storage, time)
+            if (template, name) not in built:
+                database, dsn = stack.enter_context(pg.database("tgsis_once", template))
                 with psycopg.connect(dsn) as conn:
                     value = (build or _BUILT_ONCE[name])(conn)
                     conn.commit()
-                built[storage, name] = (database, value)
-            return built[storage, name]
+                built[template, name] = (database, value)
+            return built[template, name]
 
         yield get
 
 
 @pytest.fixture
-def built_once(db_storage: str, built_once_by_storage: BuiltOnceByStorage) -> BuiltOnce:
+def built_once(db_storage: str, db_time_storage: str, built_once_by_storage: BuiltOnceByStorage) -> BuiltOnce:
     """``get(name, build=None) -> (database, value)``: a set-up built at its first use, once per session.
 
     ``name`` is a fixture of ``_BUILT_ONCE``, or the name of ``build``, a set-up
@@ -278,11 +284,11 @@ def built_once(db_storage: str, built_once_by_storage: BuiltOnceByStorage) -> Bu
     cloned by a ``db_dsn`` of the module's own (``test_sql_merge_feature_row.py``,
     one set-up per parameter). A name stands for one set-up, always built by
     the same code. Built on the template of the test's storage (its mark
-    ``storage``, else the default: ``db_storage``), once per storage.
+    ``storage``, else the default: ``db_storage``; model 2's: ``db_time_storage``), once per template.
     """
 
     def get(name: str, build: Callable[[Conn], int] | None = None) -> tuple[str, int]:
-        return built_once_by_storage(db_storage, name, build)
+        return built_once_by_storage(db_storage, name, build, time=db_time_storage)
 
     return get
 

@@ -11,7 +11,15 @@ import psycopg
 import pytest
 
 from tests.local_helpers import child_env
-from tgsis.testing import STORAGES, TestServer, default_storage, start_test_server, swapped_file, time_storage
+from tgsis.testing import (
+    STORAGES,
+    TestServer,
+    default_storage,
+    start_test_server,
+    swapped_file,
+    time_storage,
+    time_swapped_file,
+)
 
 BAD_DSN = "host=/nonexistent-socket-dir port=1 dbname=x connect_timeout=2"
 
@@ -134,6 +142,30 @@ def test_model_2s_time_tables_follow_the_templates_storage_unless_forced(
     assert got and set(got.values()) == {forced or "rows"}, got
 
 
+def _time_storages(conn: psycopg.Connection[Any]) -> dict[str, str]:
+    """The storage of each table of models 2 to 5 registered for chunks in a database."""
+    return dict(
+        conn.execute(
+            "SELECT tablename, CASE WHEN tgsis.stored_in_chunks(tablename) THEN 'chunks' ELSE 'rows' END"
+            " FROM tgsis.model_tables WHERE model >= 2 AND chunkcolumn IS NOT NULL"
+        ).fetchall()
+    )
+
+
+@pytest.mark.parametrize(("storage", "time"), [(s, t) for s in STORAGES for t in STORAGES])
+def test_a_template_of_two_storages_holds_model_1_in_one_and_model_2_in_the_other(
+    storage: str, time: str, make_database: Any, storage_templates: Any
+) -> None:
+    """What an upgraded database holds (model 1 in chunks, model 2 kept in rows) and its mirror are templates of
+    their own (TGSIS_TEST_TIME_STORAGE=by-file gives them to every other file); models 3 to 5 stay rows."""
+    with psycopg.connect(make_database(storage_templates(storage, time))) as conn:
+        assert _model1_storage(conn) == {storage}
+        got = _time_storages(conn)
+    forced = time_storage()
+    assert got.pop("times_vrtx") == got.pop("times_trgl") == (forced or time)
+    assert got and set(got.values()) == {forced or "rows"}, got
+
+
 @pytest.mark.storage("rows")
 def test_a_marked_test_takes_its_set_up_built_once_on_its_storage(
     conn: psycopg.Connection[Any], fault_clone: int
@@ -156,9 +188,11 @@ def test_an_unmarked_test_has_the_default_storage(
     tx: psycopg.Connection[Any],
     template_db: str,
     storage_template_db: str,
+    db_time_storage: str,
 ) -> None:
     assert _model1_storage(conn) == _model1_storage(tx) == {default_storage(request.node)}
     assert template_db == storage_template_db
+    assert _time_storages(conn)["times_vrtx"] == _time_storages(tx)["times_trgl"] == db_time_storage
 
 
 @pytest.mark.parametrize("suite", STORAGES)
@@ -193,6 +227,49 @@ def test_storage_by_file_gives_every_other_file_the_other_storage(tmp_path: Path
 MARKED = ["STORAGE test_one marked rows", "STORAGE test_two marked rows"]  # the mark wins in every case
 
 
+@pytest.mark.parametrize("suite", STORAGES)
+def test_time_storage_by_file_gives_every_other_file_model_2_in_the_other_storage(tmp_path: Path, suite: str) -> None:
+    # TGSIS_TEST_TIME_STORAGE=by-file: the second bit of the name's CRC-32, independent of model 1's swap
+    names = ("test_one.py", "test_two.py", "test_three.py", "test_four.py")
+    assert [(swapped_file(n), time_swapped_file(n)) for n in names] == [
+        (True, True),
+        (False, False),
+        (True, False),
+        (False, True),
+    ]
+    (tmp_path / "conftest.py").write_text('pytest_plugins = ["tgsis.testing"]\n')
+    test = (
+        "import pytest\n"
+        "def test_db(db_storage, db_time_storage):\n    print('STORAGE', __name__, db_storage, db_time_storage)\n"
+        "@pytest.mark.storage('chunks')\ndef test_marked(db_storage, db_time_storage):\n"
+        "    print('STORAGE', __name__, 'marked', db_storage, db_time_storage)\n"
+    )
+    for name in names:
+        (tmp_path / name).write_text(test)
+    other = {"rows": "chunks", "chunks": "rows"}
+    result = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-s", "-p", "no:cacheprovider", str(tmp_path)],
+        env=child_env(
+            TGSIS_TEST_DSN=BAD_DSN,
+            TGSIS_TEST_STORAGE=suite,
+            TGSIS_TEST_STORAGE_BY_FILE="1",
+            TGSIS_TEST_TIME_STORAGE="by-file",
+        ),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 0, result.stdout + result.stderr
+    seen = sorted(line[line.index("STORAGE") :] for line in result.stdout.splitlines() if "STORAGE " in line)
+    model1 = {n: other[suite] if swapped_file(n) else suite for n in names}
+    expected = [
+        f"STORAGE {n[:-3]} {model1[n]} {other[model1[n]] if time_swapped_file(n) else model1[n]}" for n in names
+    ]
+    # a test marked storage keeps model 2 with its model 1
+    expected += [f"STORAGE {n[:-3]} marked chunks chunks" for n in names]
+    assert seen == sorted(expected)
+
+
 @pytest.mark.storage("rows")
 class TestAMarkedClass:
     def test_its_tests_have_its_storage(self, conn: psycopg.Connection[Any], db_storage: str) -> None:
@@ -212,6 +289,11 @@ class TestAMarkedClass:
             "def test_db(db_storage):\n    pass\n",
             {"TGSIS_TEST_STORAGE": "chunk"},
             "TGSIS_TEST_STORAGE='chunk' names no storage",
+        ),
+        (
+            "def test_db(db_time_storage):\n    pass\n",
+            {"TGSIS_TEST_TIME_STORAGE": "by_file"},
+            "TGSIS_TEST_TIME_STORAGE='by_file' names no storage: use one of rows, chunks or by-file",
         ),
         (
             "def test_db(db_storage):\n    pass\n",

@@ -285,7 +285,7 @@ def _fake_venv(folder: Path, record: Path, fail_when: str = "") -> None:
     (folder / "bin").mkdir(parents=True)
     _script(
         folder / "bin" / "python",
-        f'echo "$TGSIS_PG|$PWD|$*|$(ls -A .. | tr "\\n" " ")|$TGSIS_TEST_STORAGE$TGSIS_TEST_STORAGE_BY_FILE" '
+        f'echo "$TGSIS_PG|$PWD|$*|$(ls -A .. | tr "\\n" " ")|$TGSIS_TEST_STORAGE$TGSIS_TEST_STORAGE_BY_FILE$TGSIS_TEST_TIME_STORAGE" '
         f">> {shlex.quote(str(record))}\n"
         f'[ "$TGSIS_PG" = {shlex.quote(fail_when) or "__never__"} ] && exit 3\nexit 0\n',
     )
@@ -331,12 +331,13 @@ def test_the_suites_run_on_both_servers_the_embedded_one_in_a_copy_alone(tmp_pat
         f"-m pytest -p no:cacheprovider --durations=15 --slowest-files=25 {option} -k x y" for option in order
     ], runs
     # both storages of model 1 stay tested: PostgreSQL 15 on chunks (the default), 18 on rows, every other
-    # file the other way round (1: TGSIS_TEST_STORAGE_BY_FILE, tests/test_harness.py); the pure tests run
+    # file the other way round (1: TGSIS_TEST_STORAGE_BY_FILE, tests/test_harness.py), and model 2's time tables
+    # in the other storage than model 1's in every other file (by-file: TGSIS_TEST_TIME_STORAGE); the pure tests run
     # once, in a pass of their own (tests/test_server_tests_only.py checks the options)
     assert by_pass == {
-        "--no-pure-tests": ("system", str(ROOT), "chunks1"),
+        "--no-pure-tests": ("system", str(ROOT), "chunks1by-file"),
         "--pure-tests-only": ("system", str(ROOT), "chunks"),
-        "--server-tests-only": ("embedded", by_pass["--server-tests-only"][1], "rows1"),
+        "--server-tests-only": ("embedded", by_pass["--server-tests-only"][1], "rows1by-file"),
     }
     copy = Path(by_pass["--server-tests-only"][1])
     assert copy.name == "tgsis" and copy != ROOT

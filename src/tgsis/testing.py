@@ -47,10 +47,12 @@ from tgsis.db.sqlsource import ExtensionSources, find_sql_dir
 
 __all__ = [
     "STORAGES",
+    "TIME_BY_FILE",
     "TestServer",
     "conn",
     "db_dsn",
     "db_storage",
+    "db_time_storage",
     "default_storage",
     "make_database",
     "pg",
@@ -58,6 +60,9 @@ __all__ = [
     "storage_of",
     "storage_template_db",
     "storage_templates",
+    "time_storage",
+    "time_storage_of",
+    "time_swapped_file",
     "tx",
 ]
 
@@ -357,6 +362,12 @@ def pytest_configure(config: pytest.Config) -> None:
     )
 
 
+TIME_BY_FILE = "by-file"
+"""``$TGSIS_TEST_TIME_STORAGE=by-file``: model 2's time tables take the other storage than model 1's in every other
+file (:func:`time_swapped_file`), so that the storage of an upgraded database (model 1 in chunks, model 2 in rows)
+and its mirror are tested as well as the storages that go together (:func:`time_storage_of`)."""
+
+
 def time_storage() -> Literal["rows", "chunks"] | None:
     """The storage forced on the time models' tables in the templates: ``$TGSIS_TEST_TIME_STORAGE``, else ``None``.
 
@@ -364,43 +375,78 @@ def time_storage() -> Literal["rows", "chunks"] | None:
     times_vrtx and times_trgl, model 3's d4dtrgl and d4dvrtx, the G-maps' gmap_dart, gmap_alpha, md_dart
     and md_alpha.
 
-    ``None`` (unset, what ``make test`` runs): the templates as the install leaves them. Model 2's time tables
+    ``None`` (unset, or :data:`TIME_BY_FILE`): the templates as the install leaves them. Model 2's time tables
     are stored in chunks by default (``chunkdefault``) as model 1's are, so they follow the template's storage
     (:func:`default_storage`: under ``$TGSIS_TEST_STORAGE_BY_FILE`` every other file takes the other one, the
-    same registry, :func:`swapped_file`); models 3 to 5 stay rows. ``rows`` or ``chunks``: every one of those
-    tables is switched to that storage after the install (``tgsis.store_in_rows`` / ``tgsis.store_in_chunks``),
-    whatever the template's model 1.
+    same registry, :func:`swapped_file`), unless :func:`time_storage_of` says otherwise for a file; models 3 to
+    5 stay rows. ``rows`` or ``chunks``: every one of those tables is switched to that storage after the
+    install (``tgsis.store_in_rows`` / ``tgsis.store_in_chunks``), whatever the template's model 1.
 
     Raises
     ------
     pytest.UsageError
-        ``$TGSIS_TEST_TIME_STORAGE`` names no storage of :data:`STORAGES`.
+        ``$TGSIS_TEST_TIME_STORAGE`` names no storage of :data:`STORAGES` and is not :data:`TIME_BY_FILE`.
     """
     value = os.environ.get("TGSIS_TEST_TIME_STORAGE") or None
-    if value is None:
+    if value is None or value == TIME_BY_FILE:
         return None
     if value not in STORAGES:
-        raise pytest.UsageError(f"TGSIS_TEST_TIME_STORAGE={value!r} names no storage: use one of {', '.join(STORAGES)}")
+        raise pytest.UsageError(
+            f"TGSIS_TEST_TIME_STORAGE={value!r} names no storage: use one of {', '.join(STORAGES)} or {TIME_BY_FILE}"
+        )
     return "chunks" if value == "chunks" else "rows"
 
 
-def _install_template(conn: psycopg.Connection[Any], method: Literal["extension", "sql"], storage: str) -> str:
+def time_swapped_file(name: str) -> bool:
+    """Whether model 2's time tables take the other storage than model 1's in the test file ``name`` (its base
+    name) under ``$TGSIS_TEST_TIME_STORAGE=by-file``: the second bit of the name's CRC-32, independent of the
+    first one (:func:`swapped_file`), so that each file runs the two storages of model 2 in the two suites."""
+    return (zlib.crc32(name.encode()) >> 1) % 2 == 1
+
+
+def time_storage_of(node: pytest.Item | pytest.Collector | None) -> Literal["rows", "chunks"]:
+    """The storage of model 2's time tables in the databases of the test (or module) ``node``.
+
+    :func:`time_storage` when it forces one; else model 1's storage (:func:`storage_of`), as the install leaves
+    it, except under ``$TGSIS_TEST_TIME_STORAGE=by-file`` for the unmarked tests of a file
+    :func:`time_swapped_file` names: the other storage. A test marked ``storage`` asks for model 1's storage and
+    keeps model 2 with it.
+    """
+    forced = time_storage()
+    if forced is not None:
+        return forced
+    model1: Literal["rows", "chunks"] = "rows" if storage_of(node) == "rows" else "chunks"
+    if (
+        node is not None
+        and os.environ.get("TGSIS_TEST_TIME_STORAGE") == TIME_BY_FILE
+        and node.get_closest_marker(STORAGE_MARK) is None
+        and time_swapped_file(node.path.name)
+    ):
+        return "chunks" if model1 == "rows" else "rows"
+    return model1
+
+
+def _install_template(
+    conn: psycopg.Connection[Any], method: Literal["extension", "sql"], storage: str, time: str
+) -> str:
     """Install tgsis into a template database with model 1 stored in ``storage``; the route taken.
 
     Model 2's time tables (registered for chunks by default) take ``storage`` too; the time models' tables are
-    then switched as :func:`time_storage` says, when it says.
+    then switched as :func:`time_storage` says, when it says, else model 2's into ``time`` when it differs.
     """
     route = install(conn, method=method, storage="rows" if storage == "rows" else "chunks").method
     forced = time_storage()
-    if forced is not None:
+    target = forced or time
+    if forced is not None or time != storage:
         conn.execute(
             sql.SQL(
                 "SELECT tgsis.{}(tablename) FROM tgsis.model_tables"
                 " WHERE model >= 2 AND chunkcolumn IS NOT NULL AND tgsis.stored_in_chunks(tablename) = {}"
-                " ORDER BY model, iudorder, tablename"
+                " AND (chunkdefault OR {}) ORDER BY model, iudorder, tablename"
             ).format(
-                sql.Identifier("store_in_chunks" if forced == "chunks" else "store_in_rows"),
-                sql.Literal(forced == "rows"),
+                sql.Identifier("store_in_chunks" if target == "chunks" else "store_in_rows"),
+                sql.Literal(target == "rows"),
+                sql.Literal(forced is not None),
             )
         )
         conn.commit()
@@ -408,40 +454,49 @@ def _install_template(conn: psycopg.Connection[Any], method: Literal["extension"
 
 
 @pytest.fixture(scope="session")
-def storage_templates(pg: TestServer) -> Iterator[Callable[[str], str]]:
-    """Factory ``storage_templates(storage) -> name`` of a template database with tgsis installed.
+def storage_templates(pg: TestServer) -> Iterator[Callable[..., str]]:
+    """Factory ``storage_templates(storage, time=None) -> name`` of a template database with tgsis installed.
 
-    Model 1 is stored in ``storage`` (``"rows"`` or ``"chunks"``); each is
-    built at its first use, once per session. Installed with ``CREATE
-    EXTENSION`` when the server has the files, else with the plain SQL.
+    Model 1 is stored in ``storage`` (``"rows"`` or ``"chunks"``), model 2's time tables in ``time`` (``None``:
+    :func:`time_storage`'s when it forces one, else ``storage``, as the install leaves them); each is built at
+    its first use, once per session. Installed with ``CREATE EXTENSION`` when the server has the files, else
+    with the plain SQL.
     """
-    built: dict[str, str] = {}
+    built: dict[tuple[str, str], str] = {}
     with contextlib.ExitStack() as stack:
 
-        def get(storage: str) -> str:
-            if storage not in STORAGES:
-                raise ValueError(f"no storage {storage!r}: use one of {', '.join(STORAGES)}")
-            if storage not in built:
-                name, dsn = stack.enter_context(pg.database(f"tgsis_tpl_{storage}"))
+        def get(storage: str, time: str | None = None) -> str:
+            if storage not in STORAGES or (time is not None and time not in STORAGES):
+                raise ValueError(f"no storage {storage!r}/{time!r}: use one of {', '.join(STORAGES)}")
+            time = time_storage() or time or storage
+            if (storage, time) not in built:
+                label = storage if time == storage else f"{storage}_time_{time}"
+                name, dsn = stack.enter_context(pg.database(f"tgsis_tpl_{label}"))
                 with psycopg.connect(dsn) as conn:
-                    method = _install_template(conn, "extension" if pg.extension_files is None else "sql", storage)
+                    method = _install_template(
+                        conn, "extension" if pg.extension_files is None else "sql", storage, time
+                    )
                 _SESSION.setdefault("template_method", method)
-                _SESSION.setdefault("storages", []).append(storage)
-                built[storage] = name
-            return built[storage]
+                _SESSION.setdefault("storages", []).append(
+                    storage if time == storage else f"{storage} (model 2 {time})"
+                )
+                built[storage, time] = name
+            return built[storage, time]
 
         yield get
 
 
 @pytest.fixture(scope="module")
-def template_db(request: pytest.FixtureRequest, storage_templates: Callable[[str], str]) -> str:
+def template_db(request: pytest.FixtureRequest, storage_templates: Callable[..., str]) -> str:
     """Name of a database with tgsis installed, model 1 in :func:`default_storage` (cloned by :func:`db_dsn`).
 
-    A test marked ``storage`` takes :func:`storage_template_db` instead (``db_dsn``
-    does): this one is the default storage's (its module's, under
-    ``$TGSIS_TEST_STORAGE_BY_FILE``) whatever the mark says.
+    Model 2's time tables as :func:`time_storage_of` says for the module. A test marked ``storage`` takes
+    :func:`storage_template_db` instead (``db_dsn`` does): this one is the default storage's (its module's,
+    under ``$TGSIS_TEST_STORAGE_BY_FILE``) whatever the mark says.
     """
-    return storage_templates(default_storage(request.node))
+    storage = default_storage(request.node)
+    time = time_storage_of(request.node) if request.node.get_closest_marker(STORAGE_MARK) is None else storage
+    return storage_templates(storage, time)
 
 
 @pytest.fixture
@@ -451,9 +506,15 @@ def db_storage(request: pytest.FixtureRequest) -> str:
 
 
 @pytest.fixture
-def storage_template_db(db_storage: str, storage_templates: Callable[[str], str]) -> str:
-    """Name of the template database of the test's storage (:func:`db_storage`), for ``make_database``."""
-    return storage_templates(db_storage)
+def db_time_storage(request: pytest.FixtureRequest) -> str:
+    """The storage of model 2's time tables in the test's databases (:func:`time_storage_of`)."""
+    return time_storage_of(request.node)
+
+
+@pytest.fixture
+def storage_template_db(db_storage: str, db_time_storage: str, storage_templates: Callable[..., str]) -> str:
+    """Name of the template database of the test's storages (:func:`db_storage`, :func:`db_time_storage`)."""
+    return storage_templates(db_storage, db_time_storage)
 
 
 @pytest.fixture
@@ -481,35 +542,39 @@ def conn(db_dsn: str) -> Iterator[psycopg.Connection[Any]]:
 
 
 @pytest.fixture(scope="session")
-def shared_databases(pg: TestServer, storage_templates: Callable[[str], str]) -> Iterator[Callable[[str], str]]:
-    """Factory ``shared_databases(storage) -> dsn``: one database per storage shared by the tests of :func:`tx`."""
-    made: dict[str, str] = {}
+def shared_databases(pg: TestServer, storage_templates: Callable[..., str]) -> Iterator[Callable[..., str]]:
+    """Factory ``shared_databases(storage, time=None) -> dsn``: one database per storage pair (model 1, model 2's
+    time tables: :func:`storage_templates`) shared by the tests of :func:`tx`."""
+    made: dict[str, str] = {}  # template -> dsn
     with contextlib.ExitStack() as stack:
 
-        def get(storage: str) -> str:
-            if storage not in made:
-                made[storage] = stack.enter_context(pg.database("tgsis_shared", storage_templates(storage)))[1]
-            return made[storage]
+        def get(storage: str, time: str | None = None) -> str:
+            template = storage_templates(storage, time)
+            if template not in made:
+                made[template] = stack.enter_context(pg.database("tgsis_shared", template))[1]
+            return made[template]
 
         yield get
 
 
 @pytest.fixture(scope="session")
-def shared_db_dsn(shared_databases: Callable[[str], str]) -> str:
+def shared_db_dsn(shared_databases: Callable[..., str]) -> str:
     """DSN of one database with tgsis installed (the default storage), shared by the tests that use :func:`tx`."""
     return shared_databases(default_storage())
 
 
 @pytest.fixture
-def tx(db_storage: str, shared_databases: Callable[[str], str]) -> Iterator[psycopg.Connection[Any]]:
+def tx(
+    db_storage: str, db_time_storage: str, shared_databases: Callable[..., str]
+) -> Iterator[psycopg.Connection[Any]]:
     """Connection inside a transaction that is rolled back after the test (cheaper than :func:`conn`).
 
-    The shared database of the test's storage (:func:`db_storage`). The test
+    The shared database of the test's storages (:func:`db_storage`, :func:`db_time_storage`). The test
     must not commit (psycopg refuses ``commit()`` inside the transaction
     block); tests that commit, or that need several connections to see each
     other's data, use :func:`conn` / :func:`db_dsn`.
     """
-    with psycopg.connect(shared_databases(db_storage)) as connection:
+    with psycopg.connect(shared_databases(db_storage, db_time_storage)) as connection:
         with connection.transaction(force_rollback=True):
             yield connection
 
@@ -529,6 +594,8 @@ def pytest_terminal_summary(terminalreporter: Any) -> None:
         + (
             f"; models 2 to 5's tables registered for chunks in {time_storage()} (TGSIS_TEST_TIME_STORAGE)"
             if time_storage() is not None
+            else "; model 2's time tables in the other storage for every other file"
+            if os.environ.get("TGSIS_TEST_TIME_STORAGE") == TIME_BY_FILE
             else "; model 2's time tables with model 1"
         )
         + "); CREATE EXTENSION tgsis: "
