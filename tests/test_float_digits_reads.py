@@ -24,11 +24,11 @@ import pytest
 
 import tgsis
 from tests.merge_data import curved_surface
-from tests.temporal_data import evolving, series
+from tests.temporal_data import evolving, grid, series
 from tgsis import gmaps
 from tgsis.db import gmaps as G
 from tgsis.db.inspect import feature_property_values, list_features
-from tgsis.temporal import TopologyPeriod
+from tgsis.temporal import EvolvingSurface, TopologyPeriod
 
 Conn = psycopg.Connection[Any]
 
@@ -310,4 +310,62 @@ def test_the_instant_and_period_writers_name_times_exactly(conn: Conn, stepped: 
     assert f"0.1, {exact}, 1" in (middle.diag.message_detail or ""), middle.diag.message_detail
     # nothing changed, and the session's own setting is as it was
     assert conn.execute("SELECT count(*) FROM tgsis.timem WHERE geoid = %s", (moving,)).fetchone() == (3,)
+    assert conn.execute("SHOW extra_float_digits").fetchone() == (str(digits),)
+
+
+def _two_periods(first: float, change: float, end: float) -> EvolvingSurface:
+    """A dome (curved, 1000 m wide) in two topology periods [first, change] and [change, end]: the same nodes, the
+    other diagonal of each grid cell after ``change``, and no jump there."""
+    vertices, triangles = grid(5)
+    vertices = vertices * 1000.0
+    vertices[:, 2] = 300.0 * np.exp(-((vertices[:, 0] - 500) ** 2 + (vertices[:, 1] - 500) ** 2) / 2e5)
+    top = vertices * [1, 1, 2]
+    a, b, d = triangles[:16].T
+    flipped = np.concatenate([np.stack([a, b, triangles[16:, 2]], 1), np.stack([b, d, triangles[16:, 2]], 1)])
+    return EvolvingSurface(
+        [
+            TopologyPeriod([first, change], triangles, np.stack([vertices, top])),
+            TopologyPeriod([change, end], flipped, np.stack([top, top + [0, 0, 50]])),
+        ]
+    )
+
+
+@pytest.mark.parametrize("digits", DIGITS)
+def test_the_temporal_checks_name_times_exactly(conn: Conn, stepped: int, digits: int) -> None:
+    """``check_temporal_geometry``'s examples, ``period_gaps``' places and ``check_period_continuity``'s refusal
+    name instants and periods as they are (0.1 + 0.2 is 0.30000000000000004 and a third 0.3333333333333333; at 15
+    digits they are other instants, which the user would then look up and miss), whatever the session prints."""
+    third, exact_third, exact_sum = 1 / 3, "0.3333333333333333", "0.30000000000000004"
+    # model 3: a period from 0.1 + 0.2 and one from a third, its first shape lifted 4 m by plain SQL (a jump)
+    tgsis.create_feature_class(conn, "moving", "SURFACE", time_model="EVOLVING")
+    moving = tgsis.insert_feature(conn, "moving", _two_periods(0.1 + 0.2, third, 2 / 3))
+    conn.execute(
+        "UPDATE tgsis.d4dvrtx SET z = z + 4 WHERE geoid = %s AND timem = %s AND timet = %s", (moving, third, third)
+    )
+    # model 2: a NaN written by plain SQL at the instant 0.1 + 0.2 of the fixture's feature
+    conn.execute("UPDATE tgsis.times_vrtx SET x = 'NaN' WHERE geoid = %s AND times = %s", (stepped, 0.1 + 0.2))
+    conn.commit()
+    _low_digits(conn, digits)
+
+    found = dict(
+        (problem.split(":")[0], example)
+        for problem, _, example in conn.execute("SELECT * FROM tgsis.check_temporal_geometry(%s)", (stepped,))
+    )
+    assert found == {"vertex with a NaN or infinite coordinate": f"instant {exact_sum}, vrtxid 0"}, found
+    (jump,) = [
+        example
+        for problem, _, example in conn.execute("SELECT * FROM tgsis.check_temporal_geometry(%s)", (moving,))
+        if problem.startswith("shape jumps")
+    ]
+    assert jump.startswith(f"period from {exact_third}: 4 apart at node "), jump
+    assert jump.endswith((f" of the period from {exact_third}", f" of the period from {exact_sum}")), jump
+    places = [place for (place,) in conn.execute("SELECT place FROM tgsis.period_gaps(%s)", (moving,))]
+    assert len(places) == 1 and places[0].endswith((exact_third, exact_sum)), places
+    with pytest.raises(psycopg.Error) as refused:
+        conn.execute("SELECT tgsis.check_period_continuity(%s)", (moving,))
+    assert refused.value.sqlstate == "TG204"
+    message = str(refused.value)
+    assert f"period from {exact_third} of geometry {moving} " in message, message
+    assert f"the period from {exact_sum} ends" in message, message
+    conn.rollback()
     assert conn.execute("SHOW extra_float_digits").fetchone() == (str(digits),)

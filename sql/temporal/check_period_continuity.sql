@@ -14,6 +14,7 @@ RETURNS void
 LANGUAGE plpgsql
 STABLE
 SET search_path FROM CURRENT
+SET extra_float_digits = 1  -- its messages name instants and periods exactly, whatever the session's setting
 AS $$
 DECLARE
     v_gap record;

@@ -8,6 +8,7 @@ CREATE FUNCTION tgsis.check_temporal_geometry(p_geoid bigint)
 RETURNS TABLE (problem text, count bigint, example text)
 LANGUAGE plpgsql
 STABLE
+SET extra_float_digits = 1  -- its examples name instants and periods exactly, whatever the session's setting
 AS $$
 DECLARE
     v_geo record;

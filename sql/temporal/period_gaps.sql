@@ -26,6 +26,7 @@ RETURNS TABLE (timem double precision, previous double precision, gap double pre
 LANGUAGE plpgsql
 STABLE
 SET search_path FROM CURRENT
+SET extra_float_digits = 1  -- its messages name instants and periods exactly, whatever the session's setting
 AS $$
 #variable_conflict use_column
 DECLARE
