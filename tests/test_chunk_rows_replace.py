@@ -219,3 +219,30 @@ def test_a_merge_writes_each_changed_chunk_once(conn: Conn) -> None:
     got = instants(conn, "DEFAULT", geoid)
     expected = shifted(shifted(_shape(1), NORTH, CHILD_SHIFT), SOUTH, PARENT_SHIFT)
     assert got[2.0][1].tobytes() == expected.tobytes()
+
+
+def test_a_key_deleted_and_inserted_again_with_other_bits_is_written_as_the_two_calls_wrote(conn: Conn) -> None:
+    """Every vertex of the instant -0.0 deleted and inserted again at 0.0 (equal by float8 =, not by bits): the
+    chunk keeps one key for its slots, so the deletes go first (the chunk emptied), then the rows (a chunk keyed
+    0.0), as delete_chunk_rows then insert_chunk_rows do; the same rows as they give, bit for bit."""
+    _class(conn, False)
+    _store(conn, "chunks")
+    series = _hostile_series(side=12)  # 144 vertices an instant: one chunk
+    a = tgsis.insert_feature(conn, "horizons", series)
+    b = tgsis.insert_feature(conn, "horizons", series)
+    conn.commit()
+    ids = list(range(144))
+    x, y, z = (series.surfaces[0].vertices[:, i].tolist() for i in range(3))
+
+    def arguments(geoid: int) -> tuple[Any, ...]:
+        return ([[geoid] * 144, ids], [[-0.0] * 144], [[geoid] * 144, ids], [[0.0] * 144, x, y, z])
+
+    deletes, times, inserts, values = arguments(a)
+    assert conn.execute(f"SELECT {DELETE}", (deletes, times)).fetchone() == (144,)
+    conn.execute(f"SELECT {INSERT}", (inserts, values))
+    assert conn.execute(f"SELECT * FROM {REPLACE}", arguments(b)).fetchone() == (144, 2)  # emptied, then new
+    keys = "SELECT DISTINCT float8send(times) FROM tgsis.times_vrtx_chunk WHERE geoid = %s AND times = 0 ORDER BY 1"
+    assert conn.execute(keys, (b,)).fetchall() == conn.execute(keys, (a,)).fetchall() == [(bytes(8),)]
+    rows = "SELECT float8send(times), vrtxid, float8send(x) FROM tgsis.times_vrtx WHERE geoid = %s ORDER BY 1, 2"
+    assert conn.execute(rows, (a,)).fetchall() == conn.execute(rows, (b,)).fetchall()
+    conn.rollback()  # (the instants' table still says -0.0)
