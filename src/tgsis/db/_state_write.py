@@ -30,7 +30,7 @@ from tgsis.db._chunk_write import stored_in_chunks, swap_object_rows, write_obje
 from tgsis.db._cube import box_corners, cube_name
 from tgsis.db._property_chunks import write_property_rows
 from tgsis.db._static import SIMPLEX, copy_extra_rows, part_rows
-from tgsis.db._transfer import Storage, delete_chunk_rows
+from tgsis.db._transfer import Storage, delete_chunk_rows, replace_chunk_rows
 from tgsis.db.classes import FeatureClass, stores_part_column
 from tgsis.db.copy import SQL_TYPES, array_wire
 from tgsis.errors import InvalidInputError
@@ -817,20 +817,38 @@ def _write_table_difference(
         return result
 
     gone, fresh = _difference(old_codes, new_codes, same)
-    deleted = 0
-    if len(gone):
-        at = np.flatnonzero(np.isin(old_codes, gone))
-        if (old.schema, old.table) in storage.chunked:  # one set-based call, not a chunk rewrite per row
-            storage.check(old.schema, old.table)
-            keys = [(old.objectkey, np.full(len(at), geoid, dtype=np.int64), "int8")]
-            keys += [(k, np.asarray(v)[at], w) for k, w, v in old.keys]
-            deleted = delete_chunk_rows(conn, old.table, keys)
-        else:
-            deleted = _delete_keys(conn, old, geoid, at)
+    at = np.flatnonzero(np.isin(old_codes, gone)) if len(gone) else np.zeros(0, dtype=np.intp)
+    chunked = (old.schema, old.table) in storage.chunked
+    keys: list[tuple[str, npt.ArrayLike, str]] = []
+    if len(at) and chunked:
+        storage.check(old.schema, old.table)
+        keys = [(old.objectkey, np.full(len(at), geoid, dtype=np.int64), "int8")]
+        keys += [(k, np.asarray(v)[at], w) for k, w, v in old.keys]
     if new.objectkey == "_geoid":  # a property row whose values are all NaN had none where it comes from: none
         fresh = fresh[~_without_row([np.asarray(v) for _, _, v in new.values], fresh)]
-    if not len(fresh):
+    columns = _fresh_columns(geoid, new, fresh) if len(fresh) else []
+    if keys and columns:  # one set-based call: each touched chunk written once (not a chunk rewrite per row)
+        deleted, _ = replace_chunk_rows(conn, old.table, keys, columns)
+        return deleted, len(fresh)
+    deleted = 0
+    if keys:
+        deleted = delete_chunk_rows(conn, old.table, keys)
+    elif len(at):
+        deleted = _delete_keys(conn, old, geoid, at)
+    if not columns:
         return deleted, 0
+    storage.copy(conn, new.schema, new.table, columns)
+    return deleted, len(fresh)
+
+
+def _fresh_columns(geoid: int, new: _TableRows, fresh: npt.NDArray[np.intp]) -> list[tuple[str, npt.ArrayLike, str]]:
+    """The ``(name, values, wire type)`` columns of the rows ``fresh`` of ``new`` (with the object key ``geoid``).
+
+    Raises
+    ------
+    InvalidInputError
+        A merged row with no value for a column that is not a float, or a value out of its column's range.
+    """
     columns: list[tuple[str, npt.ArrayLike, str]] = [
         (new.objectkey, np.full(len(fresh), geoid, dtype=np.int64), "int8")
     ]
@@ -848,8 +866,7 @@ def _write_table_difference(
         if wire not in ("float4", "float8") and chosen.dtype.kind == "f" and not wire.endswith("[]"):
             chosen = chosen.astype(np.int64)
         columns.append((name, chosen, wire))
-    storage.copy(conn, new.schema, new.table, columns)
-    return deleted, len(fresh)
+    return columns
 
 
 def _delete_keys(conn: Conn, rows: _TableRows, geoid: int, at: npt.NDArray[np.intp]) -> int:

@@ -458,12 +458,38 @@ def delete_chunk_rows(conn: Conn, table: str, keys: Sequence[tuple[str, npt.Arra
     return _chunk_rows_call(conn, "delete_chunk_rows", table, keys)
 
 
-def _chunk_rows_call(conn: Conn, function: str, table: str, columns: Sequence[tuple[str, npt.ArrayLike, str]]) -> int:
-    """``tgsis.<function>(table, names, ints, floats[, bools])``: the integer, double and boolean columns, as (columns x rows).
+def replace_chunk_rows(
+    conn: Conn,
+    table: str,
+    keys: Sequence[tuple[str, npt.ArrayLike, str]],
+    columns: Sequence[tuple[str, npt.ArrayLike, str]],
+) -> tuple[int, int]:
+    """Delete rows of the model table ``tgsis.<table>`` stored in chunks by key and insert others: one call of
+    ``tgsis.replace_chunk_rows``, each touched chunk written once.
 
-    The boolean array is sent only when there are boolean columns (``tgsis.insert_chunk_rows`` takes it, a
-    G-map dart's ``positive``; ``tgsis.delete_chunk_rows``' keys have none).
+    ``keys`` as :func:`delete_chunk_rows` takes them, ``columns`` as :func:`insert_chunk_rows`; a key deleted and
+    inserted again is replaced. Returns (rows deleted, chunks written).
+
+    Raises
+    ------
+    InvalidInputError
+        A column of another wire type (nothing is sent).
     """
+    deleted = _chunk_rows_arguments(table, keys)
+    inserted = _chunk_rows_arguments(table, columns)
+    row = conn.execute(
+        "SELECT * FROM tgsis.replace_chunk_rows(%s, %s::text[], %b::bigint[], %b::float8[],"
+        " %s::text[], %b::bigint[], %b::float8[], %b::boolean[])",
+        (table, *deleted[:3], *inserted),
+    ).fetchone()
+    return (int(row[0]), int(row[1])) if row is not None else (0, 0)
+
+
+def _chunk_rows_arguments(
+    table: str, columns: Sequence[tuple[str, npt.ArrayLike, str]]
+) -> tuple[list[str], Any, Any, Any]:
+    """(names, ints, floats, bools) of ``tgsis.insert_chunk_rows`` and its kin: the integer, double and boolean
+    columns, each as (columns x rows) lists (floats and bools None when there are none)."""
     ints = [(n, np.asarray(v, dtype=np.int64)) for n, v, w in columns if w in ("int8", "int4", "int2")]
     floats = [(n, np.asarray(v, dtype=np.float64)) for n, v, w in columns if w == "float8"]
     bools = [(n, np.asarray(v, dtype=np.bool_)) for n, v, w in columns if w == "bool"]
@@ -476,17 +502,26 @@ def _chunk_rows_call(conn: Conn, function: str, table: str, columns: Sequence[tu
     int_rows = np.stack([v for _, v in ints]) if ints else np.empty((0, count), dtype=np.int64)
     float_rows = np.stack([v for _, v in floats]) if floats else None
     bool_rows = np.stack([v for _, v in bools]) if bools else None
+    return (
+        [n for n, _ in (*ints, *floats, *bools)],
+        int_rows.tolist(),
+        float_rows.tolist() if float_rows is not None and count else None,
+        bool_rows.tolist() if bool_rows is not None and count else None,
+    )
+
+
+def _chunk_rows_call(conn: Conn, function: str, table: str, columns: Sequence[tuple[str, npt.ArrayLike, str]]) -> int:
+    """``tgsis.<function>(table, names, ints, floats[, bools])``: the integer, double and boolean columns, as (columns x rows).
+
+    The boolean array is sent only when there are boolean columns (``tgsis.insert_chunk_rows`` takes it, a
+    G-map dart's ``positive``; ``tgsis.delete_chunk_rows``' keys have none).
+    """
+    names, ints, floats, bools = _chunk_rows_arguments(table, columns)
     row = conn.execute(
         sql.SQL("SELECT tgsis.{}(%s, %s::text[], %b::bigint[], %b::float8[]{})").format(
-            sql.Identifier(function), sql.SQL(", %b::boolean[]" if bools else "")
+            sql.Identifier(function), sql.SQL(", %b::boolean[]" if bools is not None else "")
         ),
-        (
-            table,
-            [n for n, _ in (*ints, *floats, *bools)],
-            int_rows.tolist(),
-            float_rows.tolist() if float_rows is not None and count else None,
-            *([bool_rows.tolist() if bool_rows is not None and count else None] if bools else []),
-        ),
+        (table, names, ints, floats, *([bools] if bools is not None else [])),
     ).fetchone()
     return int(row[0]) if row is not None else 0
 
