@@ -7,6 +7,8 @@ from typing import Any
 import numpy as np
 import psycopg
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 import tgsis
 from tgsis import gmaps
@@ -120,6 +122,113 @@ def test_box_queries_over_any_axes_use_the_indexes(conn: Conn) -> None:
         )
     assert "md_vertex_point_idx" in points, points
     assert "md_gmap_extent_idx" in plan, plan
+
+
+def _ids_in_box(conn: Conn, geoid: int, axes: list[str], low: list[float], high: list[float], scan: str) -> list[int]:
+    """tgsis.md_vertices_in_box's ids with the plan forced: by the points' GiST index or by a sequential scan."""
+    with conn.transaction():
+        conn.execute("DISCARD PLANS")  # the function's cached plan is made again under these settings
+        index = "on" if scan == "index" else "off"
+        conn.execute(
+            f"SET LOCAL enable_seqscan = {'off' if scan == 'index' else 'on'}; SET LOCAL enable_indexscan = {index}; "
+            f"SET LOCAL enable_bitmapscan = {index}"
+        )
+        ids = [
+            r[0]
+            for r in conn.execute(
+                "SELECT vrtxid FROM tgsis.md_vertices_in_box(%s, %s, %s, %s)", (geoid, axes, low, high)
+            )
+        ]
+        plan = "\n".join(
+            r[0]
+            for r in conn.execute(
+                "EXPLAIN SELECT vrtxid FROM tgsis.md_vertex v WHERE cube(v.coordinate) <@ "
+                "tgsis.md_query_box('{x,y,z,knowledge}', %s, %s, %s) AND v.geoid = %s",
+                (axes, low, high, geoid),
+            )
+        )
+    assert ("md_vertex_point_idx" in plan) == (scan == "index"), plan
+    return ids
+
+
+@pytest.fixture
+def odd_points(conn: Conn) -> tuple[int, np.ndarray]:
+    """A stored model-5 map whose points include NaN (on one axis, on all), -0.0 and infinities; its points read back."""
+    fc = _class(conn)
+    _, _, history = _interpretations()
+    geoid = G.insert_gmap(conn, fc, history, axes=["x", "y", "z", "knowledge"])
+    odd: dict[int, list[object]] = {
+        0: ["NaN", 0.25, -100, 0],  # NaN on a queried axis
+        1: ["NaN", "NaN", "NaN", "NaN"],  # no coordinate at all: found by a scan and missed by the index before
+        2: [0.5, 0.5, -100, "NaN"],  # NaN on an axis a box over x and y leaves unbounded
+        3: ["-0", 0.5, -100, 1],  # -0.0 on the face x = 0
+        4: [0.5, "Infinity", -100, 1],
+        5: ["-Infinity", 0.5, -100, 2],
+    }
+    for vrtxid, point in odd.items():
+        conn.execute(
+            "UPDATE tgsis.md_vertex SET coordinate = %s::double precision[] WHERE geoid = %s AND vrtxid = %s",
+            ([str(c) for c in point], geoid, vrtxid),
+        )
+    conn.commit()
+    rows = conn.execute("SELECT coordinate FROM tgsis.md_vertex WHERE geoid = %s ORDER BY vrtxid", (geoid,)).fetchall()
+    return geoid, np.array([r[0] for r in rows], dtype=np.float64)
+
+
+def _expected(points: np.ndarray, axes: list[str], low: list[float], high: list[float]) -> list[int]:
+    """The closed box's points, none with a NaN coordinate, by numpy."""
+    inside = ~np.isnan(points).any(axis=1)
+    for axis, lo, hi in zip(axes, low, high):
+        k = ["x", "y", "z", "knowledge"].index(axis)
+        inside &= (points[:, k] >= lo) & (points[:, k] <= hi)
+    return [int(i) for i in np.flatnonzero(inside)]
+
+
+def test_a_box_answers_the_same_points_by_index_and_by_scan_nan_in_none(
+    conn: Conn, odd_points: tuple[int, np.ndarray]
+) -> None:
+    geoid, points = odd_points
+    # the faces: x = 0 (where -0.0 lies) and x = 0.5, y = 0.5 (grid points), and the whole of x and y
+    for axes, low, high in (
+        (["x", "y"], [0.0, 0.0], [0.5, 0.5]),
+        (["x", "y"], [-np.inf, -np.inf], [np.inf, np.inf]),
+        (["y"], [0.25], [0.25]),
+        (["knowledge"], [0.0], [0.0]),
+    ):
+        expected = _expected(points, axes, low, high)
+        assert 1 not in expected and 0 not in expected and 2 not in expected
+        assert _ids_in_box(conn, geoid, axes, low, high, "index") == expected, (axes, low, high)
+        assert _ids_in_box(conn, geoid, axes, low, high, "scan") == expected, (axes, low, high)
+    assert 3 in _expected(points, ["x"], [0.0], [0.0])  # -0.0 on the face x = 0 is inside
+
+
+# coordinates the points have: boxes with faces through points
+_EDGES = st.sampled_from([0.0, 0.2, 0.25, 0.4, 0.5, 0.6, 0.75, 1.0, -100.0, -101.0, -115.0, 2.0])
+
+
+@settings(
+    max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow]
+)
+@given(
+    box=st.lists(
+        st.tuples(
+            st.sampled_from(["x", "y", "z", "knowledge"]), _EDGES | st.floats(-200, 5), _EDGES | st.floats(-200, 5)
+        ),
+        min_size=1,
+        max_size=4,
+        unique_by=lambda b: b[0],
+    )
+)
+def test_random_boxes_answer_as_numpy_by_index_and_by_scan(
+    conn: Conn, odd_points: tuple[int, np.ndarray], box: list[tuple[str, float, float]]
+) -> None:
+    geoid, points = odd_points
+    axes = [b[0] for b in box]
+    low = [min(b[1], b[2]) for b in box]
+    high = [max(b[1], b[2]) for b in box]
+    expected = _expected(points, axes, low, high)
+    assert _ids_in_box(conn, geoid, axes, low, high, "index") == expected
+    assert _ids_in_box(conn, geoid, axes, low, high, "scan") == expected
 
 
 def test_a_malformed_box_is_refused(conn: Conn) -> None:

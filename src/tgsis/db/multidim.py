@@ -297,7 +297,10 @@ def md_in_box(
 def md_vertices_in_box(
     conn: Conn, feature_id: int, axes: Sequence[str], low: Sequence[float], high: Sequence[float]
 ) -> IntArray:
-    """The ids of a model-5 G-map's points inside a box over some of its axes (``tgsis.md_vertices_in_box``)."""
+    """The ids of a model-5 G-map's points inside a box over some of its axes (``tgsis.md_vertices_in_box``).
+
+    The box is closed; a point with a NaN coordinate is in none.
+    """
     with reraise():
         rows = conn.execute(
             "SELECT vrtxid FROM tgsis.md_vertices_in_box(%s, %s, %s, %s)",
