@@ -603,3 +603,37 @@ def test_what_a_face_could_not_carry_is_refused_by_name(conn: Conn, setup: str) 
     )
     assert conn.execute("SELECT to_regclass('public.layer_cellpros_chunk')").fetchone() == (None,)
     assert _layer_rows(conn) == before and geoid in {r[0] for r in before}
+
+
+def test_delete_feature_writes_each_chunk_once_by_the_chunk_writer(conn: Conn) -> None:
+    """delete_feature of a feature whose class's properties are in chunks (unversioned): the object's rows go by
+    tgsis.write_property_rows, one chunk row version per chunk (here each deleted), no face trigger call per row
+    (tgsis.chunk_face_queue: one a row before). The deltas are read within one transaction (PostgreSQL 15's
+    pg_stat_xact_* views may hold counts of earlier transactions not yet flushed). Fails while the rows go
+    through the face."""
+    tgsis.create_feature_class(conn, "rock", "SURFACE", cell_properties=[("porosity", "double precision")])
+    surface = curved_surface(60)
+    geoid, other = (F.insert_feature(conn, "rock", surface, drop_extra_properties=True) for _ in range(2))
+    conn.commit()
+    conn.execute("SELECT tgsis.store_class_in_chunks('rock')")
+    conn.commit()
+    chunks = conn.execute("SELECT count(*) FROM public.rock_cellpros_chunk WHERE _geoid = %s", (geoid,)).fetchone()
+    assert chunks == (-(-surface.n_vertices // 1024),)
+    kept = conn.execute("SELECT * FROM public.rock_cellpros WHERE _geoid = %s ORDER BY _idx", (other,)).fetchall()
+    conn.execute("SET track_functions = 'all'")
+    counts = (
+        "SELECT (SELECT ARRAY[n_tup_ins, n_tup_upd, n_tup_del] FROM pg_stat_xact_user_tables "
+        "WHERE relid = 'public.rock_cellpros_chunk'::regclass), (SELECT coalesce(sum(calls), 0) "
+        "FROM pg_stat_xact_user_functions WHERE funcname IN ('chunk_face_queue', 'chunk_face_write'))"
+    )
+    before = conn.execute(counts).fetchone()
+    assert F.delete_feature(conn, "rock", geoid)
+    after = conn.execute(counts).fetchone()
+    assert before is not None and after is not None
+    assert [a - b for a, b in zip(after[0], before[0])] == [0, 0, chunks[0]]
+    assert after[1] == before[1]
+    conn.commit()
+    assert conn.execute("SELECT count(*) FROM public.rock_cellpros WHERE _geoid = %s", (geoid,)).fetchone() == (0,)
+    assert (
+        conn.execute("SELECT * FROM public.rock_cellpros WHERE _geoid = %s ORDER BY _idx", (other,)).fetchall() == kept
+    )

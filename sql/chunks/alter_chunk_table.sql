@@ -7,10 +7,11 @@
 -- transaction:
 -- 1. the ALTERs run on the row definition <table>_shape (it holds no rows),
 --    its new columns commented (tgsis.comment_property_columns); what the
---    chunks have no form for (a reserved name, no property
---    left; a vector property added or renamed: its size is in the catalog only
---    after this call) is refused by name (TG100) before the chunk
---    table changes; a change of a column's type is refused (TG100, not built).
+--    chunks have no form for (a reserved name, no property left) is refused
+--    by name (TG100) before the chunk table changes; a change of a column's
+--    type is refused (TG100, not built). A vector property added or renamed
+--    is known by its own CHECK there (tgsis.chunk_columns reads its size
+--    from it until the caller writes the catalog).
 -- 2. the face and the chunk view <table>_chunk_rows are dropped, with this
 --    session's work tables of the face's writes; a user's view over the face,
 --    or another open session that wrote through it (its work tables are of the
@@ -18,13 +19,14 @@
 --    TG202 naming them), nothing changed; the face's grants are kept.
 -- 3. the chunk table, matched to the shape by column number: a new column is
 --    a new array of the property's type (compression as tgsis.create_chunk_table
---    chooses it), added without a default (no rewrite of the table: a rewrite
+--    chooses it; a vector's two-dimensional, slots x k), added without a default (no rewrite of the table: a rewrite
 --    is not MVCC-safe, an older REPEATABLE READ snapshot would read the table
 --    empty) and filled by one UPDATE of every chunk version (MVCC: an older
 --    snapshot keeps reading the versions it saw, the new array NULL there) with
 --    the column's default at every present slot and NULL at every hole
 --    (tgsis.chunk_filled: the contract's encoding; NULL everywhere when there
---    is no default); a renamed column is renamed;
+--    is no default; a vector's rows: the default vector, k NULLs at a hole,
+--    as rows_to_chunks aggregates them); a renamed column is renamed;
 --    a dropped one dropped. Other arrays are not touched (bit for bit).
 -- 4. the chunk view and the face made again (tgsis.create_chunk_view,
 --    tgsis.create_chunk_face: columns, comments, triggers, the versioned
@@ -79,19 +81,8 @@ BEGIN
         END LOOP;
     END LOOP;
     PERFORM tgsis.comment_property_columns(v_reg.schemaname, v_reg.tablename || '_shape', p_properties, p_what);
-    -- a vector property added or renamed: its size is read from the catalog (tgsis.chunk_columns), which names it only
-    -- after this call; not built, refused by name (the class can go to rows, change, and come back)
-    SELECT string_agg(quote_ident(a.attname), ', ' ORDER BY a.attnum) INTO v_alter
-      FROM pg_attribute a JOIN pg_type t ON t.oid = a.atttypid
-     WHERE a.attrelid = v_shape AND a.attnum > 0 AND NOT a.attisdropped AND t.typcategory = 'A'
-       AND NOT (v_cols ? a.attnum::text AND v_cols -> a.attnum::text ->> 0 = a.attname);
-    IF v_alter IS NOT NULL THEN
-        RAISE EXCEPTION 'the vector property % of % cannot be added or renamed in chunks', v_alter, tgsis.chunk_relation(p_table, '')
-            USING ERRCODE = 'TG100',
-                  DETAIL = 'A vector property is stored in chunks (a two-dimensional array), but adding or renaming one on a class '
-                           'stored in chunks is not built; nothing was changed.',
-                  HINT = 'store the class in rows (tgsis.store_class_in_rows), change the property, then store it in chunks again';
-    END IF;
+    -- (a vector property added or renamed: tgsis.chunk_columns reads its size from its own CHECK, the catalog
+    -- naming it only after this call)
     PERFORM FROM tgsis.chunk_columns(p_table);  -- TG100 by name: a reserved name, none left
     IF EXISTS (SELECT FROM pg_attribute a WHERE a.attrelid = v_shape AND a.attnum > 0 AND NOT a.attisdropped
                  AND v_cols ? a.attnum::text AND (v_cols -> a.attnum::text ->> 1)::oid <> a.atttypid) THEN
@@ -112,17 +103,28 @@ BEGIN
     -- 3. the chunk table: added columns first (their length from an array there before), renamed, dropped
     v_float := CASE WHEN EXISTS (SELECT FROM pg_settings WHERE name = 'default_toast_compression' AND 'lz4' = ANY (enumvals))
                     THEN 'lz4' ELSE 'pglz' END;
-    FOR v_c IN SELECT a.attname, format_type(a.atttypid, a.atttypmod) AS typename, a.atttypid, v_new ->> a.attnum::text AS def
-                 FROM pg_attribute a
+    FOR v_c IN SELECT a.attname, format_type(a.atttypid, a.atttypmod) AS typename, a.atttypid, v_new ->> a.attnum::text AS def,
+                      c.role, c.typename AS elemtype, c.size
+                 FROM pg_attribute a JOIN tgsis.chunk_columns(p_table) c ON c.name = a.attname
                 WHERE a.attrelid = v_shape AND a.attnum > 0 AND NOT a.attisdropped AND v_new ? a.attnum::text
                 ORDER BY a.attnum LOOP
         -- no default, no rewrite: only the catalog changes (a rewrite would show an older snapshot the table empty)
-        EXECUTE format('ALTER TABLE %s ADD COLUMN %I %s[] COMPRESSION %s', v_chunk, v_c.attname, v_c.typename,
-                       CASE WHEN v_c.atttypid = 'double precision'::regtype THEN v_float ELSE 'pglz' END);
+        -- (a vector: the same array type, two-dimensional)
+        EXECUTE format('ALTER TABLE %s ADD COLUMN %I %s[] COMPRESSION %s', v_chunk, v_c.attname, v_c.elemtype,
+                       CASE WHEN v_c.elemtype = 'double precision' THEN v_float ELSE 'pglz' END);
         -- filled by an UPDATE (MVCC: an older snapshot reads the chunk versions it saw, the new array NULL there);
         -- the other arrays' TOAST values are not copied (an unchanged external value keeps its pointer)
-        EXECUTE format('UPDATE %s SET %I = tgsis.chunk_filled((%s)::%s, %s, holes)', v_chunk,
-                       v_c.attname, coalesce(v_c.def, 'NULL'), v_c.typename, v_len);
+        IF v_c.role = 'vector' THEN
+            -- the slots' vectors as the rows of a 2-D array, as rows_to_chunks aggregates them: the default's k
+            -- values at a present slot, k NULLs at a hole (and everywhere when there is no default)
+            EXECUTE format('UPDATE %1$s SET %2$I = (SELECT array_agg(CASE WHEN g.s = ANY (coalesce(holes, ''{}'')) OR (%3$s) IS NULL '
+                           'THEN array_fill(NULL::%4$s, ARRAY[%5$s]) ELSE (%3$s)::%4$s[] END ORDER BY g.s) '
+                           'FROM generate_series(1, %6$s) AS g(s))',
+                           v_chunk, v_c.attname, coalesce(v_c.def, 'NULL'), v_c.elemtype, v_c.size, v_len);
+        ELSE
+            EXECUTE format('UPDATE %s SET %I = tgsis.chunk_filled((%s)::%s, %s, holes)', v_chunk,
+                           v_c.attname, coalesce(v_c.def, 'NULL'), v_c.typename, v_len);
+        END IF;
         EXECUTE format('COMMENT ON COLUMN %s.%I IS %L', v_chunk, v_c.attname,
                        format('%s per slot (NULL: no value, or a hole when holes lists the slot)',
                               coalesce(col_description(v_shape, (SELECT a.attnum FROM pg_attribute a

@@ -21,8 +21,9 @@
 -- NULL: only holes marks a hole; a model table keeps at least one float or
 -- ref column, NOT NULL, whose NULL marks the hole as before). typename is
 -- the column's type (format_type). 'vector' (a class's vector property: a
--- column t[] of size k > 1 in tgsis.catalog, t one of the value types): a
--- two-dimensional t[] (slots x k) in the chunk table, typename the ELEMENT
+-- column t[] of size k > 1 in tgsis.catalog, or, while tgsis.alter_chunk_table
+-- adds or renames it before the catalog names it, in its own CHECK as the
+-- class makes it; t one of the value types): a two-dimensional t[] (slots x k) in the chunk table, typename the ELEMENT
 -- type and size k (NULL for every other role); a NULL vector is a row of k
 -- NULLs there, which no vector of the row table is (its CHECK refuses a NULL
 -- element). A column of any other type is refused by name (TG100).
@@ -39,7 +40,7 @@ DECLARE
     v_class   boolean;  -- a class's property table: its non-key columns are 'value's
     v_types   regtype[] := ARRAY['smallint', 'integer', 'bigint', 'real', 'double precision', 'boolean']::regtype[];
     v_arrays  regtype[] := ARRAY['smallint[]', 'integer[]', 'bigint[]', 'real[]', 'double precision[]', 'boolean[]']::regtype[];
-    v_sizes   jsonb := '{}';  -- a class's vector properties: name -> k (tgsis.catalog)
+    v_sizes   jsonb := '{}';  -- a class's vector properties: name -> k (tgsis.catalog; else their own CHECK)
 BEGIN
     SELECT * INTO v_reg FROM tgsis.chunk_registry(p_table) r;
     IF NOT FOUND OR v_reg.chunkcolumn IS NULL THEN
@@ -63,6 +64,22 @@ BEGIN
     IF v_storage IS NULL THEN
         RAISE EXCEPTION 'the storage of % does not exist', format('%I.%I', v_reg.schemaname, v_reg.tablename)
             USING ERRCODE = 'TG200', HINT = 'create the storage of the data models first';
+    END IF;
+    IF v_class THEN
+        -- a vector property the catalog does not name yet: tgsis.alter_chunk_table adds or renames it before
+        -- add_property / rename_property write the catalog. Its size is then read from its own CHECK on the row
+        -- definition, exactly as the class makes it (k values from 1, none NULL); only the tables' owner alters it
+        SELECT v_sizes || coalesce(jsonb_object_agg(a.attname, k.size), '{}') INTO v_sizes
+          FROM pg_attribute a
+          JOIN pg_constraint con ON con.conrelid = a.attrelid AND con.contype = 'c' AND con.conkey = ARRAY[a.attnum]
+         CROSS JOIN LATERAL (SELECT (regexp_match(pg_get_expr(con.conbin, con.conrelid),
+                                                  '\(cardinality\([^)]*\) = (\d+)\)'))[1]::integer AS size) k
+         WHERE a.attrelid = v_storage AND a.attnum > 0 AND NOT a.attisdropped AND a.atttypid = ANY (v_arrays)
+           AND NOT v_sizes ? a.attname AND k.size > 1
+           AND pg_get_expr(con.conbin, con.conrelid)
+               = format('((array_ndims(%1$I) = 1) AND (array_lower(%1$I, 1) = 1) AND (cardinality(%1$I) = %2$s) '
+                        'AND (array_position(%1$I, NULL::%3$s) IS NULL))', a.attname, k.size,
+                        format_type((SELECT t.typelem FROM pg_type t WHERE t.oid = a.atttypid), NULL));
     END IF;
     -- a class's property may be named anything its registration allows; the chunk table's own columns (chunk,
     -- revision, lastrevs, revclosed, holes, vbase, vtop) and the names this layer's generated SQL uses (slot, pad,

@@ -4,10 +4,10 @@
 -- keyed by the object alone (not model 2's (geoid, times, chunk)), and only
 -- with the arrays that encoder writes. A model table's columns of role
 -- 'value' (a G-map dart's acellid and positive: model 1's encoder writes no
--- such arrays) and a class's vector properties (no encoding of their 2-D
--- arrays) would be left NULL, a silent loss: refused, naming the columns and
--- the writer to use. A class's property table is all 'value's, encoded by its
--- own client path. Both callers ask it, so that neither can be reached with a
+-- such arrays) would be left NULL, a silent loss: refused, naming the columns
+-- and the writer to use. A class's property table ('value's and 'vector's:
+-- a vector property's 2-D array, slots x k) is encoded whole by its own
+-- client path. Both callers ask it, so that neither can be reached with a
 -- table the other refuses. p_caller names the calling function in the message.
 CREATE FUNCTION tgsis.client_chunks_check(p_table text, p_caller text)
 RETURNS void
@@ -26,12 +26,6 @@ BEGIN
             USING ERRCODE = 'TG100',
                   HINT = format('write its rows through the face tgsis.%I or tgsis.insert_chunk_rows', p_table);
     END IF;
-    SELECT string_agg(c.name, ', ' ORDER BY c.colorder) INTO v_bad FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'vector';
-    IF v_bad IS NOT NULL THEN
-        RAISE EXCEPTION '% has vector properties, which tgsis.% does not write: %', p_table, p_caller, v_bad
-            USING ERRCODE = 'TG100',
-                  HINT = 'write its rows through the face or tgsis.write_property_rows';
-    END IF;
     SELECT string_agg(c.name, ', ' ORDER BY c.colorder) INTO v_bad FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'value';
     IF v_model AND v_bad IS NOT NULL THEN
         RAISE EXCEPTION 'tgsis.% has columns tgsis.% does not write: %', quote_ident(p_table), p_caller, v_bad
@@ -42,7 +36,7 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.client_chunks_check(text, text) IS
-    'refuse (TG100, naming the columns) a chunked table the client''s chunk path cannot write whole: keyed by more than the object, a class''s vector properties, a model table''s value columns; asked by tgsis.object_chunks_stage and tgsis.swap_object_chunks (p_caller: the name in the message)';
+    'refuse (TG100, naming the columns) a chunked table the client''s chunk path cannot write whole: keyed by more than the object, a model table''s value columns (a class''s scalar and vector properties are written); asked by tgsis.object_chunks_stage and tgsis.swap_object_chunks (p_caller: the name in the message)';
 
 -- internal to the two SECURITY DEFINER functions of the client's chunk path: not executable by PUBLIC
 REVOKE ALL ON FUNCTION tgsis.client_chunks_check(text, text) FROM PUBLIC;

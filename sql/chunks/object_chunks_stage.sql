@@ -45,14 +45,14 @@ BEGIN
                            'and of the property tables of classes switched by tgsis.store_class_in_chunks.',
                   HINT = 'write the rows of a table stored as rows through its view or storage';
     END IF;
-    PERFORM tgsis.client_chunks_check(p_table, 'object_chunks_stage');  -- TG100: keys, vector properties, value columns
+    PERFORM tgsis.client_chunks_check(p_table, 'object_chunks_stage');  -- TG100: keys, a model table's value columns
     v_stage := format('pg_temp.%I', 'tgsis_object_chunks_'
                                     || CASE WHEN v_reg.classname IS NULL THEN p_table ELSE tgsis.chunk_table_of(p_table)::oid::text END);
     v_cols := array_to_string(ARRAY[quote_ident(v_reg.keycolumn), 'chunk', 'revision', 'holes']
                               || CASE WHEN EXISTS (SELECT FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref')
                                       THEN ARRAY['vbase', 'vtop'] ELSE '{}'::text[] END
                               || ARRAY(SELECT quote_ident(c.name) FROM tgsis.chunk_columns(p_table) c
-                                        WHERE c.role IN ('float', 'ref', 'value') ORDER BY c.colorder)
+                                        WHERE c.role IN ('float', 'ref', 'value', 'vector') ORDER BY c.colorder)
                               || ARRAY(SELECT quote_ident(c.name || '_wide') FROM tgsis.chunk_columns(p_table) c
                                         WHERE c.role = 'ref' ORDER BY c.colorder), ', ');
     IF to_regclass(v_stage) IS NOT NULL

@@ -36,7 +36,9 @@
 -- face, 42501), the object's lock as a feature, and what the row definition
 -- refuses: a NULL at a present slot of a NOT NULL property (TG100); a class
 -- whose row definition has CHECK constraints is refused (TG100, nothing
--- written: tgsis.write_property_rows evaluates them row by row).
+-- written: tgsis.write_property_rows evaluates them row by row), but for a
+-- vector property's own CHECK as the class made it (k values from 1, none
+-- NULL), which every 2-D array the encoding checks pass holds.
 CREATE FUNCTION tgsis.swap_object_chunks(p_table text, p_geoid bigint, p_chunks bigint[], p_bases text[])
 RETURNS bigint
 LANGUAGE plpgsql
@@ -80,7 +82,7 @@ BEGIN
                            'and the property tables of classes switched by tgsis.store_class_in_chunks.',
                   HINT = 'write the rows of a table stored as rows through its view or storage';
     END IF;
-    PERFORM tgsis.client_chunks_check(p_table, 'swap_object_chunks');  -- TG100: keys, vector properties, value columns
+    PERFORM tgsis.client_chunks_check(p_table, 'swap_object_chunks');  -- TG100: keys, a model table's value columns
     v_objclass := CASE WHEN v_reg.classname IS NULL
                        THEN (SELECT t.objectclass FROM tgsis.model_tables t WHERE t.tablename = v_reg.tablename)
                        ELSE 'feature' END;
@@ -111,7 +113,7 @@ BEGIN
     v_face := tgsis.chunk_relation(p_table, '');
     v_keys := ARRAY[p_geoid::text];
     v_refs := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder);
-    v_vals := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref', 'value') ORDER BY c.colorder)
+    v_vals := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref', 'value', 'vector') ORDER BY c.colorder)
               || ARRAY(SELECT r || '_wide' FROM unnest(v_refs) AS r);
     IF cardinality(p_chunks) = 0 THEN
         EXECUTE format('TRUNCATE %s', v_stage);
@@ -129,7 +131,12 @@ BEGIN
     IF v_reg.classname IS NULL THEN
         PERFORM tgsis.check_class_write(ARRAY[p_geoid], 'UPDATE');
     ELSIF EXISTS (SELECT FROM pg_constraint con WHERE con.conrelid = tgsis.row_shape(p_table) AND con.contype = 'c'
-                     AND con.conname <> v_reg.tablename || '_shape_holds_no_rows') THEN
+                     AND con.conname <> v_reg.tablename || '_shape_holds_no_rows'
+                     -- (a vector property's own CHECK, as the class made it: held by every chunk the encoding checks pass)
+                     AND pg_get_expr(con.conbin, con.conrelid) NOT IN (
+                             SELECT format('((array_ndims(%1$I) = 1) AND (array_lower(%1$I, 1) = 1) AND (cardinality(%1$I) = %2$s) '
+                                           'AND (array_position(%1$I, NULL::%3$s) IS NULL))', c.name, c.size, c.typename)
+                               FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'vector')) THEN
         RAISE EXCEPTION '% has CHECK constraints: its chunks are not swapped', v_face
             USING ERRCODE = 'TG100',
                   DETAIL = 'The constraints are evaluated on rows; nothing was written.',
@@ -158,10 +165,14 @@ BEGIN
     END IF;
 
     -- the staged chunks: of this object and of p_chunks, once each, encoded as the upload's are checked
-    -- (a class's NOT NULL property: NULL at its holes only, which the encoding checks make NULL)
-    v_notnull := ARRAY(SELECT format('coalesce(cardinality(array_positions(c.%I, NULL)), 0) = coalesce(cardinality(c.holes), 0)', c.name)
+    -- (a class's NOT NULL property: NULL at its holes only, which the encoding checks make NULL; a vector's
+    -- 2-D array, whose rows are all NULL or none: k NULLs a hole)
+    v_notnull := ARRAY(SELECT CASE WHEN c.role = 'vector'
+                                   THEN format('(SELECT count(*) FROM unnest(c.%I) AS e WHERE e IS NULL) = %s * coalesce(cardinality(c.holes), 0)',
+                                               c.name, c.size)
+                                   ELSE format('coalesce(cardinality(array_positions(c.%I, NULL)), 0) = coalesce(cardinality(c.holes), 0)', c.name) END
                          FROM tgsis.chunk_columns(p_table) c
-                        WHERE c.role = 'value' AND EXISTS (SELECT FROM pg_attribute a WHERE a.attrelid = tgsis.row_shape(p_table)
+                        WHERE c.role IN ('value', 'vector') AND EXISTS (SELECT FROM pg_attribute a WHERE a.attrelid = tgsis.row_shape(p_table)
                                                               AND a.attname = c.name AND a.attnotnull)
                         ORDER BY c.colorder);
     EXECUTE format('SELECT c.%3$I AS geoid, c.chunk, count(*) OVER () AS n FROM %1$s c '

@@ -20,8 +20,9 @@
 -- default at present slots, NULL at holes, in every chunk version), renamed or
 -- dropped, the chunk view and the face made again with the face's grants and
 -- the columns' comments;
--- what the chunks cannot hold (a vector property, a reserved name, no
--- property left) is refused by name (TG100), nothing changed.
+-- what the chunks cannot hold (a reserved name, no property left) is
+-- refused by name (TG100), nothing changed; a vector property is added or
+-- renamed in place too.
 -- A versioned table's conflicts' marks are renewed, in rows as in chunks
 -- (tgsis.conflict_marks before, tgsis.renew_conflict_marks after): a column
 -- added or dropped changes the stored rows' fingerprints without changing a

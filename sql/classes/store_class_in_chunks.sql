@@ -24,8 +24,8 @@
 -- (tgsis.write_property_chunks, src/tgsis/db/_property_chunks.py).
 -- tgsis.store_class_in_rows goes back, a versioned class with its history.
 -- A vector property (size k) is a two-dimensional array, slots x k (plan K,
--- area V; read and written through the face, the Python paths going through
--- it too: the client codec has no vector form yet).
+-- area V), which the client codec encodes too (plan L: the Python upload,
+-- download and check-in swap move its chunks whole).
 -- A table with row-level security, policies, a user's trigger, or a view or
 -- foreign key over it is refused by name (TG202): a view can carry none of
 -- them, and dropping the rows would lose them without an error.

@@ -7,9 +7,11 @@
 -- version are refused (TG303). With p_idfield and p_ids only the
 -- rows whose id is one of p_ids go: the removed vertices, simplices or
 -- property rows of an edited mesh (tgsis.save_feature). A class's property
--- table stored in chunks: some rows of an object (and whole objects while
--- unversioned) through its face, which rewrites their chunks in the working
--- revision with the caller's rights. Returns rows affected.
+-- table stored in chunks: some rows of an object through its face, which
+-- rewrites their chunks in the working revision with the caller's rights;
+-- whole objects while unversioned by tgsis.write_property_rows, each
+-- object's rows at once (the face's checks for the set, each touched chunk
+-- written once). Returns rows affected.
 CREATE FUNCTION tgsis.delete_object_rows(p_schema text, p_table text, p_keyfield text, p_keys bigint[],
                                          p_idfield text DEFAULT NULL, p_ids bigint[] DEFAULT NULL)
 RETURNS bigint
@@ -19,6 +21,8 @@ AS $$
 DECLARE
     v_deleted bigint;
     v_where   text;
+    v_key     bigint;
+    v_ids     bigint[];
 BEGIN
     IF to_regclass(format('%I.%I', p_schema, p_table)) IS NULL THEN
         RAISE EXCEPTION 'table %.% does not exist', quote_ident(p_schema), quote_ident(p_table)
@@ -36,11 +40,25 @@ BEGIN
                || CASE WHEN p_idfield IS NOT NULL THEN format(' AND %I = ANY ($4)', p_idfield) ELSE '' END;
     -- a feature class's property table stored in chunks (tgsis.store_class_in_chunks): some rows of an object go
     -- through its face, whose trigger rewrites their chunks in the working revision (tgsis.chunk_face_write, the
-    -- caller's rights); so do whole objects while it is not versioned (its chunk table is written through the face
-    -- alone), while versioned they are closed as chunk versions (tgsis.close_object_rows)
-    IF p_schema <> 'tgsis' AND tgsis.stored_in_chunks(p_schema, p_table)
-       AND (p_idfield IS NOT NULL
-            OR NOT EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = p_schema AND tablename = p_table)) THEN
+    -- caller's rights); whole objects while it is not versioned go by the chunk writer, each object's rows at
+    -- once (tgsis.write_property_rows: the face's checks for the set, each chunk written once, not a trigger call
+    -- per row); while versioned they are closed as chunk versions (tgsis.close_object_rows)
+    IF p_schema <> 'tgsis' AND p_idfield IS NULL AND tgsis.stored_in_chunks(p_schema, p_table)
+       AND NOT EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = p_schema AND tablename = p_table) THEN
+        v_deleted := 0;
+        FOR v_key IN SELECT DISTINCT k FROM unnest(p_keys) AS k WHERE k IS NOT NULL ORDER BY 1 LOOP
+            -- (a class's property table is keyed (_geoid, _idx))
+            EXECUTE format('SELECT array_agg(_idx ORDER BY _idx) FROM %I.%I WHERE %I = $1', p_schema, p_table, p_keyfield)
+               INTO v_ids USING v_key;
+            CONTINUE WHEN v_ids IS NULL;
+            EXECUTE format('SELECT tgsis.write_property_rows(%L, $1, $2, ARRAY[]::%I.%I[])',
+                           format('%I.%I', p_schema, p_table), p_schema, p_table)
+              USING v_key, v_ids;
+            v_deleted := v_deleted + cardinality(v_ids);
+        END LOOP;
+        RETURN v_deleted;
+    END IF;
+    IF p_schema <> 'tgsis' AND p_idfield IS NOT NULL AND tgsis.stored_in_chunks(p_schema, p_table) THEN
         EXECUTE format('DELETE FROM %I.%I WHERE %s', p_schema, p_table, v_where)
           USING p_keys, NULL::integer, NULL::integer[], p_ids;
         GET DIAGNOSTICS v_deleted = ROW_COUNT;

@@ -104,6 +104,10 @@ class ChunkColumns:
     instant_kinds : tuple of str
         The type of each of ``instant`` (``float8``, the default when empty, or ``int2``, ``int4``, ``int8``):
         how :func:`to_copy` writes its value.
+    vectors : tuple of (str, int)
+        Those of the properties that are vectors (a class's vector property, role ``vector``), with their size
+        k >= 2: one two-dimensional array per chunk, slots x k from ``[1][1]``, whose row is k NULLs at a hole
+        and at a NULL vector (docs/storage.md, "Vector properties in chunks"); their values are (n, k).
     """
 
     names: tuple[str, ...]
@@ -113,9 +117,16 @@ class ChunkColumns:
     key: str = "geoid"
     instant: tuple[str, ...] = ()
     instant_kinds: tuple[str, ...] = ()
+    vectors: tuple[tuple[str, int], ...] = ()
 
     def __post_init__(self) -> None:
         kinds = dict(self.properties)
+        sizes = dict(self.vectors)
+        if len(sizes) != len(self.vectors) or any(n not in kinds or int(k) < 2 for n, k in self.vectors):
+            raise InvalidInputError(
+                f"chunk columns {list(self.names)}: vectors {list(self.vectors)} must be distinct properties "
+                "among them, of size 2 or more"
+            )
         if (self.instant_kinds and len(self.instant_kinds) != len(self.instant)) or any(
             k not in _KEY_KINDS for k in self.instant_kinds
         ):
@@ -144,9 +155,18 @@ class ChunkColumns:
         return any(name == n for n, _ in self.properties)
 
     def dtype(self, name: str) -> Any:
-        """The numpy type of column ``name``'s decoded values (int64 ids for a ref column)."""
+        """The numpy type of column ``name``'s decoded values (int64 ids for a ref column; a vector's elements')."""
         kind = self.kind(name)
         return np.int64 if name in self.refs else PROPERTY_KINDS[kind]
+
+    def size(self, name: str) -> int:
+        """The number of values of column ``name`` per row: a vector property's k, else 1."""
+        return int(dict(self.vectors).get(name, 1))
+
+    def shape(self, name: str, n: int) -> tuple[int, ...]:
+        """The shape of ``n`` rows of column ``name``: ``(n,)``, or ``(n, k)`` for a vector property."""
+        k = self.size(name)
+        return (n, k) if k > 1 else (n,)
 
     @property
     def ref_order(self) -> tuple[str, ...]:
@@ -201,8 +221,8 @@ class ChunkSet:
         Array length of each chunk (its last present slot, 1-based).
     present : (s,) bool
         False on a hole; s = lengths.sum().
-    values : dict of str to (s,) float64 or int64
-        The float8 and bigint columns (0 on holes).
+    values : dict of str to (s,) or (s, k) array
+        The float8, bigint and property columns (0 on holes); a vector property's (s, k).
     vbase : (c,) int64
         Smallest ref value of each chunk (-1 where ``wide`` or without ref columns).
     wide : (c,) bool
@@ -309,11 +329,12 @@ def encode(
         float8 columns (kept bit for bit), integers for ref and bigint columns
         (ref values >= 0: vertex ids); a property column (``spec.properties``)
         of its kind's numpy type (float32 and float64 kept bit for bit, bool
-        for ``bool``; integers that fit the kind).
+        for ``bool``; integers that fit the kind); a vector property
+        (``spec.vectors``) (n, k).
     spec : ChunkColumns
     nulls : mapping of str to (n,) array_like of bool, optional
         Property columns whose rows' values are NULL where True (the value
-        given there is ignored).
+        given there is ignored; a vector's whole row).
 
     Returns
     -------
@@ -362,7 +383,7 @@ def encode(
         """Values in id order (one per row) spread over the slots (0 on holes)."""
         if position is None:
             return np.array(rows, dtype=dtype)  # a copy: the caller's arrays are never shared
-        flat = np.zeros(total, dtype=dtype)
+        flat = np.zeros((total, *rows.shape[1:]), dtype=dtype)
         flat[position] = rows
         return flat
 
@@ -374,8 +395,8 @@ def encode(
     refs: dict[str, IntArray] = {}
     for name in spec.names:
         raw = np.asarray(columns[name])
-        if raw.shape != (n,):
-            raise InvalidInputError(f"column {name!r} has shape {raw.shape}, expected ({n},)")
+        if raw.shape != spec.shape(name, n):
+            raise InvalidInputError(f"column {name!r} has shape {raw.shape}, expected {spec.shape(name, n)}")
         if name in spec.refs:
             refs[name] = in_id_order(_int_ids(raw, f"column {name!r}"))
             continue
@@ -519,8 +540,14 @@ def _element_bytes(values: npt.NDArray[Any], kind: str, present: BoolArray) -> t
     return raw[keep], np.cumsum(np.where(present, 4 + width, 4).astype(np.int64))
 
 
-def _array_field(body: bytes, kind: str, count: int, hasnull: bool) -> bytes:
-    """One array value with its field length word (array_recv form, one dimension, lower bound 1)."""
+def _array_field(body: bytes, kind: str, count: int, hasnull: bool, size: int = 1) -> bytes:
+    """One array value with its field length word (array_recv form, lower bounds 1).
+
+    One dimension of ``count``; ``size`` > 1: two, ``count`` x ``size`` (a vector property's rows).
+    """
+    if size > 1:
+        words = [28 + len(body), 2, int(hasnull), _OID[kind], count, 1, size, 1]
+        return np.array(words, dtype=">i4").tobytes() + body
     header = np.array([20 + len(body), 1, int(hasnull), _OID[kind], count, 1], dtype=">i4").tobytes()
     return header + body
 
@@ -581,25 +608,30 @@ def to_copy(chunks: ChunkSet, geoid: int, revision: int = 0, instant: tuple[floa
     null = np.array([-1], dtype=">i4").tobytes()
 
     # every array column's elements, flat over all slots, with the byte end of each slot
-    # (kind, element bytes, slot byte ends, chunks where the column is NULL, chunks whose array has NULL elements)
-    encoded: list[tuple[str, npt.NDArray[np.uint8], IntArray, BoolArray | None, BoolArray]] = []
+    # (kind, element bytes, slot byte ends, chunks where the column is NULL, chunks whose array has NULL elements,
+    # values a slot: a vector property's k, its slot a row of k elements of the 2-D array)
+    encoded: list[tuple[str, npt.NDArray[np.uint8], IntArray, BoolArray | None, BoolArray, int]] = []
     empty = (np.empty(0, dtype=np.uint8), np.empty(0, dtype=np.int64))
     for name in spec.names:
         if name in spec.refs:
             relative = empty if chunks.wide.all() else _element_bytes(chunks.relative[name], "int4", chunks.present)
-            encoded.append(("int4", *relative, chunks.wide, has_holes))
+            encoded.append(("int4", *relative, chunks.wide, has_holes, 1))
         else:
             kind = spec.kind(name)
+            size = spec.size(name)
             missing = chunks.nulls.get(name)
+            elements, hasnull = chunks.present, has_holes
             if missing is not None and missing.any():  # a property's NULL values: NULL elements at present slots too
                 elements = chunks.present & ~missing
                 hasnull = np.logical_not(np.logical_and.reduceat(elements, offsets[:-1])) if c else has_holes
-                encoded.append((kind, *_element_bytes(chunks.values[name], kind, elements), None, hasnull))
+            if size > 1:  # a vector: k elements a slot, all NULL at a hole and at a NULL vector
+                flat, ends = _element_bytes(chunks.values[name].reshape(-1), kind, np.repeat(elements, size))
+                encoded.append((kind, flat, ends[size - 1 :: size], None, hasnull, size))
             else:
-                encoded.append((kind, *_element_bytes(chunks.values[name], kind, chunks.present), None, has_holes))
+                encoded.append((kind, *_element_bytes(chunks.values[name], kind, elements), None, hasnull, 1))
     for name in spec.ref_order:
         wide = _element_bytes(chunks.absolute[name], "int8", chunks.present) if chunks.wide.any() else empty
-        encoded.append(("int8", *wide, ~chunks.wide, has_holes))
+        encoded.append(("int8", *wide, ~chunks.wide, has_holes, 1))
 
     pieces: list[bytes] = [COPY_SIGNATURE, np.array([0, 0], dtype=">i4").tobytes()]
     for k in range(c):
@@ -619,12 +651,13 @@ def to_copy(chunks: ChunkSet, geoid: int, revision: int = 0, instant: tuple[floa
             else:
                 pieces.append(np.array([(8, chunks.vbase[k])], dtype=[("l", ">i4"), ("v", ">i8")]).tobytes())
             pieces.append(np.array([(8, vtop[k])], dtype=[("l", ">i4"), ("v", ">i8")]).tobytes())
-        for kind, flat, ends, nulled, hasnull in encoded:
+        for kind, flat, ends, nulled, hasnull, size in encoded:
             if nulled is not None and nulled[k]:
                 pieces.append(null)
                 continue
             first = int(ends[start - 1]) if start else 0
-            pieces.append(_array_field(flat[first : int(ends[stop - 1])].tobytes(), kind, count, bool(hasnull[k])))
+            body = flat[first : int(ends[stop - 1])].tobytes()
+            pieces.append(_array_field(body, kind, count, bool(hasnull[k]), size))
     pieces.append(np.array([-1], dtype=">i2").tobytes())
     return b"".join(pieces)
 
@@ -734,6 +767,67 @@ def _parse_nullable(reader: _Reader, length: int, kind: str, present: BoolArray)
     return values, elements
 
 
+def _parse_vector(
+    reader: _Reader, length: int, kind: str, present: BoolArray, size: int
+) -> tuple[npt.NDArray[Any], BoolArray]:
+    """A vector property's 2-D array value (array_send form): (values (count, size), which rows are not NULL).
+
+    Its rows are the chunk's slots, from ``[1][1]``; a row is k NULLs at every hole and at a NULL vector, and
+    no row is partly NULL (it would read as a NULL vector: ``tgsis.chunk_encoding_checks`` refuses it too).
+    """
+    end = reader.pos + length
+    if length < 28 or end > len(reader.buf):
+        raise InvalidInputError(f"binary COPY data ends inside an array (byte {reader.pos} of {len(reader.buf)})")
+    ndim, hasnull, oid, count, lbound, inner, inner_lbound = (reader.int(4) for _ in range(7))
+    if oid != _OID[kind]:
+        raise InvalidInputError(f"a chunk array has element type {oid}, expected {_OID[kind]} ({kind})")
+    if ndim != 2 or lbound != 1 or inner_lbound != 1 or count != len(present) or inner != size:
+        raise InvalidInputError(
+            f"a chunk's vector array is not two-dimensional from [1][1] of its {len(present)} slots x {size}"
+        )
+    width = np.dtype(_BIG_ENDIAN[kind]).itemsize
+    dtype = [("l", ">i4"), ("v", _BIG_ENDIAN[kind])]
+    if not hasnull:
+        if length != 28 + count * size * (4 + width) or not present.all():
+            raise InvalidInputError("a chunk's vector array does not match the chunk's holes and size")
+        items = np.frombuffer(reader.buf, dtype=dtype, count=count * size, offset=reader.pos)
+        if bool((items["l"] != width).any()):
+            raise InvalidInputError("a chunk array element has an unexpected length")
+        reader.pos = end
+        return items["v"].reshape(count, size), np.ones(count, dtype=bool)
+    rows = np.zeros(count, dtype=bool)
+    starts = np.zeros(count, dtype=np.int64)
+    pos = reader.pos
+    nulls = np.full(size, -1, dtype=">i4")
+    for i in range(count):  # (only chunks with a hole or a NULL vector come here)
+        first = int.from_bytes(reader.buf[pos : pos + 4], "big", signed=True)
+        if first == -1:
+            if pos + 4 * size > end or not np.array_equal(np.frombuffer(reader.buf, ">i4", size, pos), nulls):
+                raise InvalidInputError("a chunk's vector array has a row partly NULL")
+            pos += 4 * size
+        elif first == width:
+            if pos + size * (4 + width) > end:
+                raise InvalidInputError("binary COPY data ends inside an array")
+            if bool((np.frombuffer(reader.buf, dtype, size, pos)["l"] != width).any()):
+                raise InvalidInputError("a chunk's vector array has a row partly NULL")
+            rows[i] = True
+            starts[i] = pos
+            pos += size * (4 + width)
+        else:
+            raise InvalidInputError("a chunk array element has an unexpected length")
+    if pos != end:
+        raise InvalidInputError("a chunk array is longer than its elements")
+    if bool((rows & ~present).any()):
+        raise InvalidInputError("a chunk's vector array has a value at a hole")
+    values = np.zeros((count, size), dtype=_BIG_ENDIAN[kind])
+    if rows.any():
+        raw = np.frombuffer(reader.buf, dtype=np.uint8)
+        picks = (starts[rows][:, None] + 4 + np.arange(size) * (4 + width))[:, :, None] + np.arange(width)
+        values[rows] = raw[picks].copy().view(_BIG_ENDIAN[kind]).reshape(-1, size)
+    reader.pos = end
+    return values, rows
+
+
 def from_copy(payload: bytes, spec: ChunkColumns) -> ChunkSet:
     """Parse the binary COPY output of ``COPY (SELECT <spec.select_columns()> ...) TO STDOUT (FORMAT binary)``.
 
@@ -775,6 +869,7 @@ def from_copy(payload: bytes, spec: ChunkColumns) -> ChunkSet:
     in_batch: dict[tuple[str, bool], list[bool]] = {(key, w): [] for _, key, w in columns}
     with_holes: dict[tuple[str, bool], dict[int, npt.NDArray[Any]]] = {(key, w): {} for _, key, w in columns}
     null_parts: dict[str, dict[int, BoolArray]] = {}  # a property's NULL values at present slots, per chunk index
+    vector_parts: dict[str, dict[int, npt.NDArray[Any]]] = {n: {} for n, _ in spec.vectors}  # (slots, k) per chunk
     while True:
         count = reader.int(2)
         if count == -1:
@@ -825,16 +920,24 @@ def from_copy(payload: bytes, spec: ChunkColumns) -> ChunkSet:
                 int(v) for v in np.frombuffer(reader.buf, dtype=">i4", count=5, offset=reader.pos)
             )
             if present is None:
-                if ndim == 1 and size > CHUNK_SIZE:
+                if ndim in (1, 2) and size > CHUNK_SIZE:
                     raise InvalidInputError(
                         f"chunk {number}: column {name} has {size} elements, more than the {CHUNK_SIZE} ids of a chunk "
                         "(a chunk table of another chunk size?)"
                     )
-                present = np.ones(max(size, 0) if ndim == 1 else 0, dtype=bool)
+                present = np.ones(max(size, 0) if ndim in (1, 2) else 0, dtype=bool)
                 if len(holes):
                     if int(holes.min()) < 1 or int(holes.max()) >= len(present):
                         raise InvalidInputError(f"chunk {number}: holes {holes.tolist()} outside 1..{len(present) - 1}")
                     present[holes - 1] = False
+            if key in vector_parts:  # a vector property's 2-D array
+                vector, rows = _parse_vector(reader, length, kind, present, spec.size(key))
+                missing = present & ~rows
+                if missing.any():
+                    null_parts.setdefault(key, {})[k] = missing
+                vector_parts[key][k] = vector
+                in_batch[slot].append(False)
+                continue
             width = np.dtype(_BIG_ENDIAN[kind]).itemsize
             if ndim == 1 and not hasnull and oid == _OID[kind] and lbound == 1 and length == 20 + size * (4 + width):
                 if size != len(present) or not present.all():
@@ -894,8 +997,15 @@ def from_copy(payload: bytes, spec: ChunkColumns) -> ChunkSet:
 
     present_all = np.concatenate(presents) if presents else np.empty(0, dtype=bool)
     values = {
-        n: sorted_slots(column((n, False), spec.kind(n), spec.dtype(n))) for n in spec.names if n not in spec.refs
+        n: sorted_slots(column((n, False), spec.kind(n), spec.dtype(n)))
+        for n in spec.names
+        if n not in spec.refs and n not in vector_parts
     }
+    for name, parts in vector_parts.items():
+        out = np.zeros((int(offsets[-1]), spec.size(name)), dtype=spec.dtype(name))
+        for k, vector in parts.items():
+            out[offsets[k] : offsets[k + 1]] = vector
+        values[name] = sorted_slots(out)
     nulls: dict[str, BoolArray] = {}
     for name, parts in null_parts.items():
         mask = np.zeros(int(offsets[-1]), dtype=bool)

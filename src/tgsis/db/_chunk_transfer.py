@@ -455,7 +455,7 @@ def _objects(layout: ChunkTable, geoids: Sequence[int], payload: bytes) -> dict[
 
 def _rows(geoid: int, chunks: ChunkSet | None, spec: ChunkColumns) -> ObjectRows:
     if chunks is None or not len(chunks.chunk):
-        empty = {n: np.empty(0, dtype=spec.dtype(n)) for n in spec.names}
+        empty = {n: np.empty(spec.shape(n, 0), dtype=spec.dtype(n)) for n in spec.names}
         return ObjectRows(geoid, np.empty(0, dtype=np.int64), empty)
     ids, columns = chunks.rows()
     holes = np.empty(0, dtype=np.int64) if chunks.present.all() else chunks.ids()[~chunks.present]
@@ -649,7 +649,7 @@ class PackedChunks:
         geoids = np.repeat(np.asarray([o.geoid for o in objects], dtype=np.int64), counts)
         ids = np.concatenate([np.empty(0, dtype=np.int64), *(o.ids for o in objects)])
         values = [
-            np.concatenate([np.empty(0, dtype=spec.dtype(name)), *(o.columns[name] for o in objects)])
+            np.concatenate([np.empty(spec.shape(name, 0), dtype=spec.dtype(name)), *(o.columns[name] for o in objects)])
             for name in self.columns[1:]
         ]
         return [geoids, ids, *values]

@@ -98,8 +98,8 @@ def property_chunks(conn: Conn, fc: FeatureClass, table: str) -> PropertyChunks 
     """The chunk layout of the class's property table ``table`` if its bulk paths are open, else None.
 
     None: the table is rows (or anything but the face of ``tgsis.store_class_in_chunks``), or its chunk
-    table has a column this client does not encode (a vector property's 2-D array among them: such a class
-    is read and written through the face). ``versioned``: the table is versioned (a download reads
+    table has a column this client does not encode. A vector property (size k in the catalog) is a 2-D
+    array, slots x k (:attr:`~tgsis._chunks.ChunkColumns.vectors`), its values (n, k). ``versioned``: the table is versioned (a download reads
     the chunk versions the session sees, as the face; an upload goes by :func:`write_property_rows`, not
     :func:`upload_properties`). Read from the catalog.
     """
@@ -120,15 +120,17 @@ def _property_layout(conn: Conn, schema: str, table: str) -> PropertyChunks | No
     if row is None or row[1] != "v":
         return None
     oid, _, readable, insertable, versioned, name = row
-    # a vector property (2-D chunk arrays, size k in the catalog) has no client encoding yet: the face reads and
-    # writes such a class (its arrays are typed t[] as a scalar property's, so the catalog tells them apart)
-    vectors = conn.execute(
-        "SELECT EXISTS (SELECT FROM tgsis.catalog c CROSS JOIN LATERAL jsonb_array_elements(c.cell_properties) AS p "
-        "WHERE c.schemaname = %s AND c.cellprotable = %s AND coalesce((p ->> 'size')::integer, 1) > 1)",
-        (schema, table),
-    ).fetchone()
-    if vectors is None or vectors[0]:
-        return None
+    # a vector property (size k in the catalog, as tgsis.chunk_columns reads it): a 2-D chunk array, slots x k,
+    # typed t[] as a scalar property's, so the catalog tells them apart
+    vectors = dict(
+        conn.execute(
+            "SELECT p ->> 'name', (p ->> 'size')::integer FROM tgsis.catalog c "
+            "CROSS JOIN LATERAL jsonb_array_elements(c.cell_properties) AS p "
+            "WHERE c.schemaname = %s AND c.cellprotable = %s AND p ? 'size' AND (p ->> 'size')::integer > 1 "
+            "AND coalesce(p ->> 'alignment', c.proalignment) = c.proalignment",
+            (schema, table),
+        ).fetchall()
+    )
     attributes = conn.execute(
         "SELECT attname::text, format_type(atttypid, atttypmod) FROM pg_catalog.pg_attribute "
         "WHERE attrelid = %s AND attnum > 0 AND NOT attisdropped ORDER BY attnum",
@@ -144,7 +146,14 @@ def _property_layout(conn: Conn, schema: str, table: str) -> PropertyChunks | No
     if names[:2] != ["_geoid", "chunk"] or any(t not in _KINDS for _, t in arrays) or size != (True,):
         return None  # (a layout this client does not know: the face still reads and writes it)
     kinds = tuple((n, _KINDS[t]) for n, t in arrays)
-    columns = ChunkColumns(tuple(n for n, _ in arrays), properties=kinds, key="_geoid")
+    if set(vectors) - {n for n, _ in arrays}:
+        return None
+    columns = ChunkColumns(
+        tuple(n for n, _ in arrays),
+        properties=kinds,
+        key="_geoid",
+        vectors=tuple((n, int(vectors[n])) for n, _ in arrays if n in vectors),
+    )
     return PropertyChunks(
         table, columns, bool(versioned), bool(readable), schema, bool(insertable), str(name), int(oid)
     )
@@ -182,9 +191,9 @@ def upload_properties(
         The geometries (distinct), new: their chunks must not be there.
     counts : sequence of int
         Rows of each (its vertices or cells).
-    values : sequence of mapping of str to (n_i,) ndarray
-        Per geometry, the properties it has, cast to their column types; a property of the table it lacks
-        (a collection member's) is NULL in its rows, as on rows.
+    values : sequence of mapping of str to (n_i,) or (n_i, k) ndarray
+        Per geometry, the properties it has, cast to their column types (a vector property (n_i, k)); a
+        property of the table it lacks (a collection member's) is NULL in its rows, as on rows.
 
     Returns
     -------
@@ -206,7 +215,10 @@ def upload_properties(
         unknown = sorted(set(given) - set(spec.names))
         if unknown:
             raise InvalidInputError(f"{layout.name} has no properties {unknown}")
-        columns = {name: given[name] if name in given else np.zeros(n, dtype=spec.dtype(name)) for name in spec.names}
+        columns = {
+            name: given[name] if name in given else np.zeros(spec.shape(name, n), dtype=spec.dtype(name))
+            for name in spec.names
+        }
         nulls = {name: np.ones(n, dtype=bool) for name in spec.names if name not in given}
         objects.append(ObjectRows(int(geoid), np.arange(n, dtype=np.int64), columns, nulls=nulls))
     encoded = [(o.geoid, encode(o.ids, o.columns, spec, o.nulls)) for o in objects if len(o.ids)]
@@ -408,17 +420,32 @@ def swap_property_rows(
     keys = given.get("_geoid", np.full(len(written), geoid, dtype=np.int64))
     if (
         set(given) - {"_geoid", "_idx", *spec.names}
-        or any(len(v) != len(written) or v.ndim != 1 for v in given.values())
+        or any(
+            v.shape != (spec.shape(name, len(written)) if name in spec.names else (len(written),))
+            for name, v in given.items()
+        )
         or len(np.unique(written)) != len(written)
         or bool((written < 0).any())
         or not bool((np.asarray(keys) == geoid).all())
     ):
         return None  # (the server path refuses such rows by name)
     # (READ COMMITTED asked first, as open_stage asks it: no chunk read at all where the path does not apply)
+    # (a vector property's own CHECK, as the class made it, is held by the encoding: tgsis.swap_object_chunks
+    # passes it by the same text)
     checks = conn.execute(
         "SELECT EXISTS (SELECT FROM pg_constraint con WHERE con.conrelid = to_regclass(%s) AND con.contype = 'c' "
-        "AND con.conname <> %s) OR current_setting('transaction_isolation') <> 'read committed'",
-        (sql.Identifier(schema, f"{table}_shape").as_string(conn), f"{table}_shape_holds_no_rows"),
+        "AND con.conname <> %s AND pg_get_expr(con.conbin, con.conrelid) NOT IN ("
+        "SELECT format('((array_ndims(%%1$I) = 1) AND (array_lower(%%1$I, 1) = 1) AND (cardinality(%%1$I) = %%2$s) "
+        "AND (array_position(%%1$I, NULL::%%3$s) IS NULL))', v.name, v.size, left(format_type(a.atttypid, a.atttypmod), -2)) "
+        "FROM unnest(%s::text[], %s::int[]) AS v(name, size) JOIN pg_attribute a ON a.attrelid = to_regclass(%s) "
+        "AND a.attname = v.name)) OR current_setting('transaction_isolation') <> 'read committed'",
+        (
+            sql.Identifier(schema, f"{table}_shape").as_string(conn),
+            f"{table}_shape_holds_no_rows",
+            [n for n, _ in spec.vectors],
+            [k for _, k in spec.vectors],
+            sql.Identifier(schema, f"{table}_shape").as_string(conn),
+        ),
     ).fetchone()
     if checks is None or checks[0]:
         return None
@@ -437,7 +464,7 @@ def swap_property_rows(
     nulls: dict[str, npt.NDArray[np.bool_]] = {}
     for name in spec.names:
         dtype = spec.dtype(name)
-        edit = given[name].astype(dtype) if name in given else np.zeros(len(written), dtype=dtype)
+        edit = given[name].astype(dtype) if name in given else np.zeros(spec.shape(name, len(written)), dtype=dtype)
         values[name] = np.concatenate([old_columns[name][keep].astype(dtype), edit])
         kept = old_nulls[name][keep] if name in old_nulls else np.zeros(int(keep.sum()), dtype=bool)
         fresh = np.zeros(len(written), dtype=bool) if name in given else np.ones(len(written), dtype=bool)
