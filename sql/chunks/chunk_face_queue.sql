@@ -28,7 +28,14 @@
 -- writes of the key. The row key's columns are the trigger's arguments after
 -- the row table (tgsis.create_chunk_face: no catalog query per row).
 -- BEFORE each INSERT/UPDATE/DELETE statement (TG_LEVEL = 'STATEMENT') it makes
--- the tables when the session has none and refuses (42501) one it did not make
+-- the tables when the transaction has none (ON COMMIT DROP: made again by each
+-- transaction that writes through the face, gone at its COMMIT or ROLLBACK, and
+-- with a ROLLBACK TO a savepoint that made them; a later statement of the same
+-- transaction finds them; so a session idle after it wrote holds nothing of the
+-- face's row type, and add_property, the way back into rows and
+-- alter_chunk_table do not wait for it: docs/storage.md; the sequence
+-- tgsis_face_seq, which depends on nothing, lives as long as the session) and
+-- refuses (42501) one it did not make
 -- (another owner: a session's own table could carry its own rows or triggers,
 -- run here with the definer's rights); a table made by the definer cannot be
 -- dropped or replaced by the session afterwards, so checking once per
@@ -59,14 +66,14 @@ DECLARE
 BEGIN
     IF TG_LEVEL = 'STATEMENT' THEN
         IF to_regclass(v_rows) IS NULL THEN
-            EXECUTE format('CREATE TEMP TABLE %s (op "char" NOT NULL, n %s, o %s, s bigint NOT NULL) ON COMMIT DELETE ROWS',
+            EXECUTE format('CREATE TEMP TABLE %s (op "char" NOT NULL, n %s, o %s, s bigint NOT NULL) ON COMMIT DROP',
                            v_rows, TG_RELID::regclass, TG_RELID::regclass);
         END IF;
         IF to_regclass(v_dels) IS NULL THEN
             -- m: the old row of an UPDATE moving its key away (written by that UPDATE's row; here only so that a later
             -- sub-statement finds its key gone)
             EXECUTE format('CREATE TEMP TABLE %s (o %s NOT NULL, s bigint NOT NULL, m boolean NOT NULL DEFAULT false) '
-                           'ON COMMIT DELETE ROWS', v_dels, TG_RELID::regclass);
+                           'ON COMMIT DROP', v_dels, TG_RELID::regclass);
             -- the row key: the chunk table's key columns before revision, the chunk column in place of chunk
             v_keycols := tgsis.chunk_row_key(TG_ARGV[0]);
             -- a DELETE whose join meets a row twice deletes it once: the second a conflict on the row's key
@@ -151,4 +158,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.chunk_face_queue() FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.chunk_face_queue() IS
-    'row-level INSTEAD OF trigger of the face of a chunk table (tgsis.create_chunk_face; TG_ARGV[0] the row table): keeps each row written, typed (the face''s row type, never text), in the session''s pg_temp.tgsis_face_rows_<view oid> (a DELETE''s in tgsis_face_dels_<view oid>, once) for tgsis.chunk_face_write, which checks and writes them when the statement ends; BEFORE each statement it makes those tables or refuses (42501) one the session made';
+    'row-level INSTEAD OF trigger of the face of a chunk table (tgsis.create_chunk_face; TG_ARGV[0] the row table): keeps each row written, typed (the face''s row type, never text), in the transaction''s pg_temp.tgsis_face_rows_<view oid> (a DELETE''s in tgsis_face_dels_<view oid>, once) for tgsis.chunk_face_write, which checks and writes them when the statement ends; BEFORE each statement it makes those tables (ON COMMIT DROP) or refuses (42501) one the session made';

@@ -43,8 +43,9 @@
 --   * the statement's rows, moved from pg_temp.tgsis_face_rows_<view oid> and
 --     tgsis_face_dels_<view oid> (kept typed, the face's row type, by
 --     tgsis.chunk_face_queue) into the face's
---     queue pg_temp.tgsis_face_queue_<view oid> (the session's, owned by the
---     storage's owner), are checked and written all at once:
+--     queue pg_temp.tgsis_face_queue_<view oid> (the transaction's, ON COMMIT
+--     DROP as the row trigger's tables, owned by the storage's owner), are
+--     checked and written all at once:
 --     the chunks they touch locked in key order, compared set-based, written
 --     by one call of tgsis.write_chunk_rows (a key twice in one statement,
 --     not two inserts: 21000); a statement changing features of versioned
@@ -143,11 +144,12 @@ BEGIN
     SELECT * INTO v_dec FROM tgsis.chunk_decode_sql(v_table, 'c') AS d;
     v_keytext := format('concat_ws(%L, %s)', ', ',
                         (SELECT string_agg(format('(%%1$s).%I::text', k), ', ' ORDER BY o) FROM unnest(v_keycols) WITH ORDINALITY AS u(k, o)));
-    -- the session's temporary tables of rows to write: the face's columns, _delete, the row read
+    -- the transaction's temporary tables of rows to write (ON COMMIT DROP: a session idle after its commit keeps
+    -- nothing of the face's row type): the face's columns, _delete, the row read
     FOREACH v_tab IN ARRAY ARRAY[v_now, v_queue] LOOP
         IF to_regclass(v_tab) IS NULL THEN
             EXECUTE format('CREATE TEMP TABLE %s (LIKE %s, _delete boolean NOT NULL DEFAULT false, tgsis_old %s, tgsis_seq bigint) '
-                           'ON COMMIT DELETE ROWS', v_tab, v_face, v_face);
+                           'ON COMMIT DROP', v_tab, v_face, v_face);
         ELSIF (SELECT c.relowner FROM pg_class c WHERE c.oid = to_regclass(v_tab)) <> (SELECT r.oid FROM pg_roles r WHERE r.rolname = current_user) THEN
             RAISE EXCEPTION 'the session''s table % was not made by the face''s trigger', v_tab
                 USING ERRCODE = 'insufficient_privilege', HINT = 'drop the temporary table and write again';
