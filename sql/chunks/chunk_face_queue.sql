@@ -98,8 +98,8 @@ BEGIN
         -- look their key up among the deleted rows (one index probe; a plain statement pays nothing per row), and
         -- the key moves of the UPDATE rows kept are added to them (set-based, once per sub-statement). PostgreSQL
         -- fires this trigger once per query for each of INSERT, UPDATE, DELETE: a second UPDATE sub-statement
-        -- after one moving keys finds the moved keys missing here; its rows of those keys are then refused by
-        -- the flush (27000), never written twice (docs/storage.md)
+        -- after one moving keys does not come here; the UPDATE row that moves a key marks it itself (below), so
+        -- its later rows of that key are skipped all the same (docs/storage.md)
         EXECUTE format('SELECT EXISTS (SELECT FROM %s) OR EXISTS (SELECT FROM %s)', v_rows, v_dels) INTO v_pending;
         IF v_pending THEN
             v_keycols := tgsis.chunk_row_key(TG_ARGV[0]);
@@ -139,7 +139,27 @@ BEGIN
                 RETURN NULL;
             END IF;
         END IF;
-        EXECUTE format('INSERT INTO %s VALUES (''U'', $1, $2, nextval(%L))', v_rows, v_seq) USING NEW, OLD;
+        IF TG_NARGS > 1 THEN
+            -- a row whose key the UPDATE moves: its old key is gone for the rest of the statement (a later WITH
+            -- query's UPDATE of it, which fires no BEFORE statement trigger of its own, and a join meeting it
+            -- again), as the row view has it gone: the old row kept among the moved ones (m) and the setting
+            -- raised, so that the later rows of that key are skipped (S) above. The move is seen by the row's own
+            -- INSERT (its key columns compared there: no statement more per row)
+            v_old := NULL;
+            FOREACH v_k IN ARRAY TG_ARGV[1:TG_NARGS - 1] LOOP
+                v_old := concat_ws(' AND ', v_old, format('($1).%1$I IS NOT DISTINCT FROM ($2).%1$I', v_k));
+            END LOOP;
+            EXECUTE format('INSERT INTO %s VALUES (''U'', $1, $2, nextval(%L)) RETURNING s, NOT (%s)', v_rows, v_seq, v_old)
+               INTO v_n, v_gone USING NEW, OLD;
+            IF v_gone THEN
+                EXECUTE format('INSERT INTO %s (o, s, m) VALUES ($1, $2, true) ON CONFLICT DO NOTHING', v_dels) USING OLD, v_n;
+                IF current_setting(v_flag, true) IS DISTINCT FROM '1' THEN
+                    PERFORM set_config(v_flag, '1', true);  -- (cleared by the flush)
+                END IF;
+            END IF;
+        ELSE
+            EXECUTE format('INSERT INTO %s VALUES (''U'', $1, $2, nextval(%L))', v_rows, v_seq) USING NEW, OLD;
+        END IF;
         RETURN NEW;
     END IF;
     EXECUTE format('INSERT INTO %s VALUES ($1, nextval(%L)) ON CONFLICT DO NOTHING', v_dels, v_seq) USING OLD;
