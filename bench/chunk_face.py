@@ -7,10 +7,14 @@ object, and through the face (each row kept by the row trigger, all written by o
 the statement ends) a 10,000-row ``UPDATE``, a 5,000-row ``INSERT ... SELECT`` of new ids (5 new chunks)
 and a 10,000-row ``DELETE``. The baseline, in the same process: the same rows in a plain table with a
 primary key (``public.plain``), the same key read and the same statements; both end with the same rows
-(checked bit for bit). This was tests/test_chunk_face.py's measuring
+(checked bit for bit). Also a one-row ``UPDATE`` per transaction through the face (the face's work tables
+are made by each writing transaction and dropped at its commit, ``ON COMMIT DROP``): the best of
+``--rounds`` rounds of ``--transactions`` transactions each, a round's mean per transaction, and the same
+on the plain table; ``--one-row-only`` measures only that (run it with another checkout's sources on
+``PYTHONPATH`` to compare two versions of the face in one sitting). This was tests/test_chunk_face.py's measuring
 test until 2026-12-06; the test now checks the same on 20,000 vertices. Prints ``name: value`` lines.
 
-    .venv/bin/python bench/chunk_face.py [--n 1000000]
+    .venv/bin/python bench/chunk_face.py [--n 1000000] [--rounds 5] [--transactions 20] [--one-row-only]
 """
 
 from __future__ import annotations
@@ -28,6 +32,9 @@ Conn = psycopg.Connection[Any]
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--n", type=int, default=1_000_000)
+    parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument("--transactions", type=int, default=20)
+    parser.add_argument("--one-row-only", action="store_true")
     args = parser.parse_args()
     n = args.n
     with bench_database() as conn:
@@ -45,6 +52,32 @@ def main() -> None:
         conn.execute("ANALYZE public.plain")
         conn.commit()
         key = n * 2 // 3 + 7
+
+        def one_row_transactions(table: str) -> float:
+            """The best round's mean time of a one-row UPDATE transaction (committed) on ``table``."""
+            best = float("inf")
+            for _ in range(args.rounds):
+                start = time.perf_counter()
+                for i in range(args.transactions):
+                    done = conn.execute(
+                        f"UPDATE {table} SET z = %s WHERE geoid = 1 AND vrtxid = %s",  # noqa: S608
+                        (float(i), key),
+                    ).rowcount
+                    conn.commit()
+                    assert done == 1
+                best = min(best, (time.perf_counter() - start) / args.transactions)
+            return best
+
+        face_tx = one_row_transactions("tgsis.vrtx")
+        plain_tx = one_row_transactions("public.plain")
+        print(
+            f"one-row UPDATE transaction, {n}-vertex object (best of {args.rounds} rounds of {args.transactions}): "
+            f"through the face {face_tx * 1000:.1f} ms, of the plain table {plain_tx * 1000:.2f} ms"
+        )
+        print(f"face_one_row_update_tx_ms: {face_tx * 1000:.1f}")
+        print(f"plain_one_row_update_tx_ms: {plain_tx * 1000:.2f}")
+        if args.one_row_only:
+            return
         want = [(float(key), -float(key), 0.5)]
         face_read = "SELECT x, y, z FROM tgsis.vrtx WHERE geoid = 1 AND vrtxid = %s"
         assert conn.execute(face_read, (key,)).fetchall() == want

@@ -72,9 +72,12 @@ def wait_until_blocked(observer: Conn, pid: int, by: int) -> None:
 def close_and_wait_gone(session: Conn, observer: Conn) -> None:
     """Close ``session`` and wait until its backend has left ``pg_stat_activity``.
 
-    A closed session's backend drops its temporary tables (the face's work tables) in a transaction of its own as
-    it exits, after the client has gone: a switch of storage run at once may meet that transaction's snapshot
-    (TG202) or its tables (2BP01). A user retries, as the hint says; a test waits."""
+    A closed session's backend that ever made a temporary object (the face's sequence ``tgsis_face_seq``, which
+    lives as long as the session; a stage table) drops them in a transaction of its own as it exits, after the
+    client has gone: a switch of storage run at once may meet that transaction's snapshot (TG202,
+    ``tgsis.older_snapshots_check``). The face's work tables of its row type no longer outlive the transaction
+    that wrote (ON COMMIT DROP), so a test need not close a session that wrote before a switch; one that does
+    waits. A user retries, as the hint says."""
     pid = session.info.backend_pid
     session.close()
     deadline = time.monotonic() + 15

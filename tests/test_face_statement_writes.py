@@ -95,12 +95,13 @@ def test_insert_update_delete_of_thousands_of_rows_write_each_chunk_once(
     odd = list(range(FIRST + 1, FIRST + NEW, 2))
     assert row is not None and row[0] == NEW // 2 and row[1] == sum(odd)
     assert abs(row[2]) < 1e-6  # z = -i / 3
-    # DEFAULT never saw them, and the session's kept rows are gone
+    # DEFAULT never saw them, and the transaction's tables of kept rows are gone with it (ON COMMIT DROP)
     assert _count(conn, geoid, f"vrtxid >= {FIRST}") == 0
     if db_storage == "chunks":
-        kept = conn.execute("SELECT format('pg_temp.%I', 'tgsis_face_rows_' || 'tgsis.vrtx'::regclass::oid)").fetchone()
-        assert kept is not None
-        assert conn.execute(f"SELECT count(*) FROM {kept[0]}").fetchone() == (0,)  # noqa: S608
+        kept = conn.execute(
+            "SELECT to_regclass(format('pg_temp.%I', 'tgsis_face_rows_' || 'tgsis.vrtx'::regclass::oid))"
+        ).fetchone()
+        assert kept == (None,)
     conn.rollback()
 
 
@@ -341,9 +342,13 @@ _OPS = {
     "m": "UPDATE tgsis.vrtx SET vrtxid = %(k)s, z = z - 1 WHERE geoid = %(g)s AND vrtxid = %(n)s RETURNING vrtxid",
     "v": "UPDATE tgsis.vrtx SET x = x * 2 WHERE geoid = %(g)s AND vrtxid = %(n)s RETURNING vrtxid",  # NEXT in place
     "x": "DELETE FROM tgsis.vrtx WHERE geoid = %(g)s AND vrtxid = %(n)s RETURNING vrtxid",  # NEXT deleted
+    # NEXT moved onto KEY by a join that meets it twice
+    "M": "UPDATE tgsis.vrtx SET vrtxid = %(k)s, z = z - 1 FROM (VALUES (1), (2)) AS j(n) "
+    "WHERE geoid = %(g)s AND vrtxid = %(n)s RETURNING vrtxid",
 }
 _ORDERS = [a + b for a in "iud" for b in "iud"] + [a + b + c for a in "iud" for b in "iud" for c in "iud"]
 _ORDERS += [o for o in (a + b for a in "iudm" for b in "iudm") if "m" in o] + ["mv", "mx", "vm", "xm", "vdu", "vdi"]
+_ORDERS += ["M", "Mv", "vM", "mvx"]  # a join meeting the row it moves twice; a move, an update, a delete of one row
 
 
 def _sub_statements(order: str) -> str:
@@ -396,14 +401,12 @@ def test_every_order_of_writes_on_one_key_in_one_statement_answers_as_the_row_vi
     }
     assert len(on["rows"]) == len(on["chunks"]) == 2 * len(_ORDERS)
     differing = [(a, b[2]) for a, b in zip(on["rows"], on["chunks"], strict=True) if a != b]
-    # known: a key moved away by one UPDATE WITH query, then updated again by a second UPDATE WITH query (the
-    # face's statement trigger fires once per query for UPDATE: the second does not learn the move); the row view
-    # skips the update, the face refuses the statement, nothing written (docs/storage.md)
-    refused = [(a, b) for a, b in differing if a[0] in ("mm", "mv") and b in ("23505", "27000")]
-    assert len(refused) <= 4
+    # a key moved away by one UPDATE WITH query, then updated again by a second UPDATE WITH query (which fires no
+    # BEFORE statement trigger of its own) or met again by the same UPDATE's join: skipped, as the row view skips
+    # it (the row trigger marks the moved key when it keeps the row; the face refused these statements before)
     # the row view's own defect: a row of an UPDATE that is not the statement's first row of the view is queued and
     # written when the statement ends, where a key deleted by another WITH query meanwhile looks deleted by another
     # transaction: 40001 (a retry fails again); the face skips it, as the row view's one-row path does ("du")
     defect = [(a, b) for a, b in differing if a[0] == "vdu" and a[2] == "40001" and not isinstance(b, str)]
     assert [b[0] for _, b in defect] == [(1, 1, 0)] * len(defect)
-    assert [d for d in differing if d not in refused + defect] == []
+    assert [d for d in differing if d not in defect] == []

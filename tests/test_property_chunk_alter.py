@@ -236,7 +236,12 @@ def test_an_upload_in_flight_is_waited_for_and_gets_the_new_property(db_dsn: str
     assert np.array_equal(back["p_f8"].view(np.int64), values["p_f8"].view(np.int64))
 
 
-def test_another_open_session_that_wrote_through_the_face_blocks_it_by_name(db_dsn: str, conn: Conn) -> None:
+def test_another_session_inside_a_transaction_that_wrote_through_the_face_is_waited_for(
+    db_dsn: str, conn: Conn
+) -> None:
+    """Its work tables (of the face's row type) and its lock live as long as its transaction: the add waits (here
+    55P03 under a lock_timeout), nothing changed; once it commits, the add goes through while it stays connected
+    (ON COMMIT DROP; before, the idle session blocked the add, TG202 naming its tables, until it disconnected)."""
     surface = curved_surface()
     _class(conn, "held")
     geoid = F.insert_feature(
@@ -246,11 +251,18 @@ def test_another_open_session_that_wrote_through_the_face_blocks_it_by_name(db_d
     conn.commit()
     other = connect(db_dsn, "other")
     other.execute("UPDATE public.held_cellpros SET p_i4 = 1 WHERE _geoid = %s AND _idx = 0", (geoid,))
-    other.commit()  # still open: its work tables of the face's row type stay
     before = _arrays(conn, "held")
-    state, message = sqlstate(conn, "SELECT tgsis.add_property('held', 'cell', '[\"p_new\", \"integer\"]', '5')")
-    assert state == "TG202" and "tgsis_face" in message, message
+    conn.execute("SET lock_timeout = '300ms'")
+    add = "SELECT tgsis.add_property('held', 'cell', '[\"p_new\", \"integer\"]', '5')"
+    state, message = sqlstate(conn, add)
+    assert state == "55P03", message
     assert _arrays(conn, "held") == before
+    other.commit()  # still open, idle
+    assert sqlstate(conn, add) == (None, "")
+    conn.commit()
+    assert conn.execute(
+        "SELECT p_i4, p_new FROM public.held_cellpros WHERE _geoid = %s AND _idx = 0", (geoid,)
+    ).fetchone() == (1, 5)
     other.close()
 
 

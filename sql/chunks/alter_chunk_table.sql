@@ -13,10 +13,12 @@
 --    is known by its own CHECK there (tgsis.chunk_columns reads its size
 --    from it until the caller writes the catalog).
 -- 2. the face and the chunk view <table>_chunk_rows are dropped, with this
---    session's work tables of the face's writes; a user's view over the face,
---    or another open session that wrote through it (its work tables are of the
---    face's row type), blocks the drop (2BP01, which the caller reports as
---    TG202 naming them), nothing changed; the face's grants are kept.
+--    transaction's work tables of the face's writes; a user's view over the face
+--    blocks the drop (2BP01, which the caller reports as TG202 naming it),
+--    nothing changed; another session's work tables (of the face's row type)
+--    live only in a transaction that wrote through the face (ON COMMIT DROP),
+--    which holds the face's lock until it ends: waited for (the LOCK below),
+--    never a session idle after its commit; the face's grants are kept.
 -- 3. the chunk table, matched to the shape by column number: a new column is
 --    a new array of the property's type (compression as tgsis.create_chunk_table
 --    chooses it; a vector's two-dimensional, slots x k), added without a default (no rewrite of the table: a rewrite
@@ -93,8 +95,9 @@ BEGIN
 
     -- 2. what reads the chunk table's columns goes; the face's grants are given back to the new face
     SELECT c.relacl INTO v_grants FROM pg_class c WHERE c.oid = v_face;
-    -- this session's own work tables of the face's writes (tgsis.chunk_face_write: of the face's row type, emptied
-    -- at each statement's end) go with it; another session's block the drop (2BP01, reported as TG202 by the caller)
+    -- this transaction's own work tables of the face's writes (tgsis.chunk_face_write: of the face's row type,
+    -- emptied at each statement's end, ON COMMIT DROP) go with it; another session's exist only while its writing
+    -- transaction is open, and the LOCK above waited for it to end
     EXECUTE format('DROP TABLE IF EXISTS pg_temp.%I, pg_temp.%I, pg_temp.%I, pg_temp.%I', 'tgsis_face_now_' || v_face::oid,
                    'tgsis_face_queue_' || v_face::oid, 'tgsis_face_rows_' || v_face::oid, 'tgsis_face_dels_' || v_face::oid);
     EXECUTE format('DROP VIEW %s', v_face);  -- (its triggers with it)

@@ -28,7 +28,14 @@
 -- writes of the key. The row key's columns are the trigger's arguments after
 -- the row table (tgsis.create_chunk_face: no catalog query per row).
 -- BEFORE each INSERT/UPDATE/DELETE statement (TG_LEVEL = 'STATEMENT') it makes
--- the tables when the session has none and refuses (42501) one it did not make
+-- the tables when the transaction has none (ON COMMIT DROP: made again by each
+-- transaction that writes through the face, gone at its COMMIT or ROLLBACK, and
+-- with a ROLLBACK TO a savepoint that made them; a later statement of the same
+-- transaction finds them; so a session idle after it wrote holds nothing of the
+-- face's row type, and add_property, the way back into rows and
+-- alter_chunk_table do not wait for it: docs/storage.md; the sequence
+-- tgsis_face_seq, which depends on nothing, lives as long as the session) and
+-- refuses (42501) one it did not make
 -- (another owner: a session's own table could carry its own rows or triggers,
 -- run here with the definer's rights); a table made by the definer cannot be
 -- dropped or replaced by the session afterwards, so checking once per
@@ -59,14 +66,14 @@ DECLARE
 BEGIN
     IF TG_LEVEL = 'STATEMENT' THEN
         IF to_regclass(v_rows) IS NULL THEN
-            EXECUTE format('CREATE TEMP TABLE %s (op "char" NOT NULL, n %s, o %s, s bigint NOT NULL) ON COMMIT DELETE ROWS',
+            EXECUTE format('CREATE TEMP TABLE %s (op "char" NOT NULL, n %s, o %s, s bigint NOT NULL) ON COMMIT DROP',
                            v_rows, TG_RELID::regclass, TG_RELID::regclass);
         END IF;
         IF to_regclass(v_dels) IS NULL THEN
             -- m: the old row of an UPDATE moving its key away (written by that UPDATE's row; here only so that a later
             -- sub-statement finds its key gone)
             EXECUTE format('CREATE TEMP TABLE %s (o %s NOT NULL, s bigint NOT NULL, m boolean NOT NULL DEFAULT false) '
-                           'ON COMMIT DELETE ROWS', v_dels, TG_RELID::regclass);
+                           'ON COMMIT DROP', v_dels, TG_RELID::regclass);
             -- the row key: the chunk table's key columns before revision, the chunk column in place of chunk
             v_keycols := tgsis.chunk_row_key(TG_ARGV[0]);
             -- a DELETE whose join meets a row twice deletes it once: the second a conflict on the row's key
@@ -91,8 +98,8 @@ BEGIN
         -- look their key up among the deleted rows (one index probe; a plain statement pays nothing per row), and
         -- the key moves of the UPDATE rows kept are added to them (set-based, once per sub-statement). PostgreSQL
         -- fires this trigger once per query for each of INSERT, UPDATE, DELETE: a second UPDATE sub-statement
-        -- after one moving keys finds the moved keys missing here; its rows of those keys are then refused by
-        -- the flush (27000), never written twice (docs/storage.md)
+        -- after one moving keys does not come here; the UPDATE row that moves a key marks it itself (below), so
+        -- its later rows of that key are skipped all the same (docs/storage.md)
         EXECUTE format('SELECT EXISTS (SELECT FROM %s) OR EXISTS (SELECT FROM %s)', v_rows, v_dels) INTO v_pending;
         IF v_pending THEN
             v_keycols := tgsis.chunk_row_key(TG_ARGV[0]);
@@ -132,7 +139,27 @@ BEGIN
                 RETURN NULL;
             END IF;
         END IF;
-        EXECUTE format('INSERT INTO %s VALUES (''U'', $1, $2, nextval(%L))', v_rows, v_seq) USING NEW, OLD;
+        IF TG_NARGS > 1 THEN
+            -- a row whose key the UPDATE moves: its old key is gone for the rest of the statement (a later WITH
+            -- query's UPDATE of it, which fires no BEFORE statement trigger of its own, and a join meeting it
+            -- again), as the row view has it gone: the old row kept among the moved ones (m) and the setting
+            -- raised, so that the later rows of that key are skipped (S) above. The move is seen by the row's own
+            -- INSERT (its key columns compared there: no statement more per row)
+            v_old := NULL;
+            FOREACH v_k IN ARRAY TG_ARGV[1:TG_NARGS - 1] LOOP
+                v_old := concat_ws(' AND ', v_old, format('($1).%1$I IS NOT DISTINCT FROM ($2).%1$I', v_k));
+            END LOOP;
+            EXECUTE format('INSERT INTO %s VALUES (''U'', $1, $2, nextval(%L)) RETURNING s, NOT (%s)', v_rows, v_seq, v_old)
+               INTO v_n, v_gone USING NEW, OLD;
+            IF v_gone THEN
+                EXECUTE format('INSERT INTO %s (o, s, m) VALUES ($1, $2, true) ON CONFLICT DO NOTHING', v_dels) USING OLD, v_n;
+                IF current_setting(v_flag, true) IS DISTINCT FROM '1' THEN
+                    PERFORM set_config(v_flag, '1', true);  -- (cleared by the flush)
+                END IF;
+            END IF;
+        ELSE
+            EXECUTE format('INSERT INTO %s VALUES (''U'', $1, $2, nextval(%L))', v_rows, v_seq) USING NEW, OLD;
+        END IF;
         RETURN NEW;
     END IF;
     EXECUTE format('INSERT INTO %s VALUES ($1, nextval(%L)) ON CONFLICT DO NOTHING', v_dels, v_seq) USING OLD;
@@ -151,4 +178,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.chunk_face_queue() FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.chunk_face_queue() IS
-    'row-level INSTEAD OF trigger of the face of a chunk table (tgsis.create_chunk_face; TG_ARGV[0] the row table): keeps each row written, typed (the face''s row type, never text), in the session''s pg_temp.tgsis_face_rows_<view oid> (a DELETE''s in tgsis_face_dels_<view oid>, once) for tgsis.chunk_face_write, which checks and writes them when the statement ends; BEFORE each statement it makes those tables or refuses (42501) one the session made';
+    'row-level INSTEAD OF trigger of the face of a chunk table (tgsis.create_chunk_face; TG_ARGV[0] the row table): keeps each row written, typed (the face''s row type, never text), in the transaction''s pg_temp.tgsis_face_rows_<view oid> (a DELETE''s in tgsis_face_dels_<view oid>, once) for tgsis.chunk_face_write, which checks and writes them when the statement ends; BEFORE each statement it makes those tables (ON COMMIT DROP) or refuses (42501) one the session made';

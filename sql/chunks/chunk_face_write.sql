@@ -43,8 +43,9 @@
 --   * the statement's rows, moved from pg_temp.tgsis_face_rows_<view oid> and
 --     tgsis_face_dels_<view oid> (kept typed, the face's row type, by
 --     tgsis.chunk_face_queue) into the face's
---     queue pg_temp.tgsis_face_queue_<view oid> (the session's, owned by the
---     storage's owner), are checked and written all at once:
+--     queue pg_temp.tgsis_face_queue_<view oid> (the transaction's, ON COMMIT
+--     DROP as the row trigger's tables, owned by the storage's owner), are
+--     checked and written all at once:
 --     the chunks they touch locked in key order, compared set-based, written
 --     by one call of tgsis.write_chunk_rows (a key twice in one statement,
 --     not two inserts: 21000); a statement changing features of versioned
@@ -143,11 +144,12 @@ BEGIN
     SELECT * INTO v_dec FROM tgsis.chunk_decode_sql(v_table, 'c') AS d;
     v_keytext := format('concat_ws(%L, %s)', ', ',
                         (SELECT string_agg(format('(%%1$s).%I::text', k), ', ' ORDER BY o) FROM unnest(v_keycols) WITH ORDINALITY AS u(k, o)));
-    -- the session's temporary tables of rows to write: the face's columns, _delete, the row read
+    -- the transaction's temporary tables of rows to write (ON COMMIT DROP: a session idle after its commit keeps
+    -- nothing of the face's row type): the face's columns, _delete, the row read
     FOREACH v_tab IN ARRAY ARRAY[v_now, v_queue] LOOP
         IF to_regclass(v_tab) IS NULL THEN
             EXECUTE format('CREATE TEMP TABLE %s (LIKE %s, _delete boolean NOT NULL DEFAULT false, tgsis_old %s, tgsis_seq bigint) '
-                           'ON COMMIT DELETE ROWS', v_tab, v_face, v_face);
+                           'ON COMMIT DROP', v_tab, v_face, v_face);
         ELSIF (SELECT c.relowner FROM pg_class c WHERE c.oid = to_regclass(v_tab)) <> (SELECT r.oid FROM pg_roles r WHERE r.rolname = current_user) THEN
             RAISE EXCEPTION 'the session''s table % was not made by the face''s trigger', v_tab
                 USING ERRCODE = 'insufficient_privilege', HINT = 'drop the temporary table and write again';
@@ -180,19 +182,20 @@ BEGIN
     END IF;
     -- the statement's writes of one key more than once, in its order (writable WITH queries: every
     -- sub-statement's rows reach this flush together), answered as the row view answers them row by row:
-    -- events i (an inserted row, also an UPDATE's new key), u (an UPDATE keeping the key), d (a deleted row,
-    -- also an UPDATE's old key when it moves), S and X (an UPDATE, a DELETE the row trigger skipped, counted 0,
-    -- since the statement had deleted the row before). A key whose first event is not i was there when the
-    -- statement began (it read the row); its state walks orig -> changed (u) or gone (d) -> new (i):
+    -- events i (an inserted row, also an UPDATE's new key), u (an UPDATE keeping the key), d (a deleted row),
+    -- m (an UPDATE's old key when it moves), S and X (an UPDATE, a DELETE the row trigger skipped, counted 0,
+    -- since the statement had deleted the row, or moved it away, before). A key whose first event is not i was there when the
+    -- statement began (it read the row); its state walks orig -> changed (u) or gone (d), moved (m) -> new (i):
     --   i of a key there (orig, changed, new) is 23505; u or d (X) of a row changed or inserted again since the
     --   statement read it is 27000; two UPDATEs of one row (u or S, an UPDATE ... FROM meeting it twice, two WITH
-    --   queries; also when the row was deleted before) are 21000, which the row view raises when the statement
+    --   queries; also when the row was deleted before, not when it was moved away: skipped however often, as
+    --   the row view skips it) are 21000, which the row view raises when the statement
     --   ends, so after any of the others; a key whose first event is i and that has others: 23505 (there
     --   already, or inserted twice). The first refusal in the statement's order is raised; nothing is written.
     v_err := NULL;
     FOR v_ev IN EXECUTE format(
             'WITH e AS (SELECT %3$s AS kt, lower(r.op::text) AS ev, r.s FROM %1$s r WHERE r.op IN (''I'') '
-            '           UNION ALL SELECT %4$s, CASE WHEN r.op = ''U'' AND NOT (%5$s) THEN ''d'' WHEN r.op = ''U'' THEN ''u'' '
+            '           UNION ALL SELECT %4$s, CASE WHEN r.op = ''U'' AND NOT (%5$s) THEN ''m'' WHEN r.op = ''U'' THEN ''u'' '
             '                                     ELSE r.op::text END, r.s FROM %1$s r WHERE r.op IN (''U'', ''S'', ''X'') '
             '           UNION ALL SELECT %3$s, ''i'', r.s FROM %1$s r WHERE r.op = ''U'' AND NOT (%5$s) '
             '           UNION ALL SELECT %6$s, ''d'', d.s FROM %2$s d WHERE NOT d.m) '
@@ -215,16 +218,19 @@ BEGIN
                     -- session changed in between; refused, never written twice)
                     WHEN 'u' THEN
                         v_nu := v_nu + 1;
-                        IF v_st IN ('new', 'gone') THEN v_code := '27000'; ELSE v_st := 'changed'; END IF;
+                        IF v_st IN ('new', 'gone', 'moved') THEN v_code := '27000'; ELSE v_st := 'changed'; END IF;
                     WHEN 'S' THEN
-                        v_nu := v_nu + 1;
+                        -- (a row moved away is skipped however often it is met again, as the row view skips it)
+                        IF v_st <> 'moved' THEN v_nu := v_nu + 1; END IF;
                         IF v_st = 'new' THEN v_code := '27000'; END IF;
                     WHEN 'd' THEN
                         IF v_st <> 'orig' THEN v_code := '27000'; ELSE v_st := 'gone'; END IF;
+                    WHEN 'm' THEN
+                        IF v_st <> 'orig' THEN v_code := '27000'; ELSE v_st := 'moved'; END IF;
                     WHEN 'X' THEN
-                        IF v_st IN ('changed', 'new') THEN v_code := '27000'; ELSE v_st := 'gone'; END IF;
+                        IF v_st IN ('changed', 'new') THEN v_code := '27000'; ELSIF v_st <> 'moved' THEN v_st := 'gone'; END IF;
                     ELSE  -- 'i'
-                        IF v_st <> 'gone' THEN v_code := '23505'; ELSE v_st := 'new'; END IF;
+                        IF v_st NOT IN ('gone', 'moved') THEN v_code := '23505'; ELSE v_st := 'new'; END IF;
                 END CASE;
                 EXIT WHEN v_code IS NOT NULL;
             END LOOP;

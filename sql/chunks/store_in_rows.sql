@@ -89,8 +89,9 @@ BEGIN
     END IF;
     PERFORM tgsis.protect_model_tables(v_reg.model);  -- the per-class row-level security of the row storage
     v_n := tgsis.chunks_to_rows(p_table);  -- verified (TG000: nothing changed)
-    -- this session's tables of rows written through the face (tgsis.chunk_face_write) are of its row type; another
-    -- session's block the DROP below by name (2BP01: nothing changed)
+    -- this transaction's tables of rows written through the face (tgsis.chunk_face_write) are of its row type; another
+    -- session's exist only while its writing transaction is open (ON COMMIT DROP), and would block the DROP below by
+    -- name (2BP01: nothing changed); a session idle after it wrote holds none
     EXECUTE format('DROP TABLE IF EXISTS pg_temp.%I, pg_temp.%I, pg_temp.%I, pg_temp.%I', 'tgsis_face_now_' || v_face::oid,
                    'tgsis_face_queue_' || v_face::oid, 'tgsis_face_rows_' || v_face::oid, 'tgsis_face_dels_' || v_face::oid);
     EXECUTE format('DROP VIEW %s', v_face);
