@@ -22,7 +22,6 @@ from psycopg import sql
 
 import tgsis
 from tests.merge_data import sqlstate
-from tests.sessions import close_and_wait_gone
 from tests.test_vector_property_chunks import _insert_mesh, _vec
 from tgsis.testing import TestServer
 
@@ -187,8 +186,8 @@ def test_pg_dump_and_restore_keep_the_added_and_renamed_vectors(
 
 def test_a_session_writing_the_face_meanwhile_is_waited_for_or_waits(db_dsn: str, conn: Conn) -> None:
     """Another session's open transaction that wrote through the face: the add waits for it (lock_timeout here:
-    55P03) or is refused (TG202, its work tables), nothing changed; once it committed and left, the add succeeds,
-    its row kept and given the default. An add in an open transaction: a writer waits for it (55P03), then
+    55P03) or is refused (TG202, its work tables), nothing changed; once it committed, the add succeeds while that
+    session stays connected, idle (the face's work tables are ON COMMIT DROP), its row kept and given the default. An add in an open transaction: a writer waits for it (55P03), then
     writes the new vector. Fails when a row is lost or the add is refused otherwise."""
     _vec(conn, "vec")
     conn.execute("SELECT tgsis.store_class_in_chunks('vec')")
@@ -202,8 +201,7 @@ def test_a_session_writing_the_face_meanwhile_is_waited_for_or_waits(db_dsn: str
     names = "SELECT count(*) FROM tgsis.chunk_columns('public.vec_cellpros') WHERE name = 'dir'"
     assert conn.execute(names).fetchone() == (0,)
     conn.rollback()
-    other.commit()
-    close_and_wait_gone(other, conn)  # (its work tables of the face's writes live as long as the session)
+    other.commit()  # and stays connected, idle
     conn.execute(ADD_DIR.format(c="vec"))
     # the add not committed: a writer of the face waits for it
     with psycopg.connect(db_dsn) as writer:
@@ -218,3 +216,4 @@ def test_a_session_writing_the_face_meanwhile_is_waited_for_or_waits(db_dsn: str
         "SELECT _idx, pair, dir FROM public.vec_cellpros WHERE _geoid = 1 AND _idx IN (4, 6) ORDER BY 1"
     ).fetchall()
     assert got == [(4, [41, 42], [-0.0, -0.0]), (6, [6, -6], [8.0, 9.0])]
+    other.close()
