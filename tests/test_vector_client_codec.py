@@ -13,7 +13,6 @@ property tables are chunks whatever model 1's storage is, so the file runs unmar
 
 from __future__ import annotations
 
-import struct
 from typing import Any
 
 import numpy as np
@@ -23,6 +22,7 @@ from psycopg import sql
 
 import tgsis
 from tests.merge_data import curved_surface
+from tests.test_vector_property_chunks import PATTERNS, PROPS, _double, _vec
 from tgsis import _chunks
 from tgsis.db import _property_chunks
 from tgsis.db import features as F
@@ -33,15 +33,7 @@ from tgsis.mesh import Surface
 
 Conn = psycopg.Connection[Any]
 
-PROPS = [("normal", "double precision", 3), ("t", "real", 1), ("pair", "integer", 2), ("rgb", "real", 3)]
-#: float8 bit patterns that must survive: -0.0, the smallest subnormal, a NaN with a payload, 1 + 1 ulp
-PATTERNS = [0x8000000000000000, 0x0000000000000001, 0x7FF8000000000ABC, 0x3FF0000000000001]
 ODD4 = np.array([0x7FC0_0ABC, 1, 0x8000_0000], dtype=np.uint32).view(np.float32)
-
-
-def _double(bits: int) -> float:
-    value: float = struct.unpack(">d", struct.pack(">Q", bits))[0]
-    return value
 
 
 def _digest(conn: Conn, table: str, geoid: int) -> list[tuple[Any, ...]]:
@@ -78,23 +70,8 @@ def test_the_codec_writes_the_servers_vector_chunks_byte_for_byte(conn: Conn) ->
     """Chunks the server encoded (holes, NULL vectors, a whole chunk of them, odd bits, an id beyond int4) are
     decoded by the client and encoded again into the very COPY stream the server sends of them. Fails when the
     codec has no vector form, or writes any byte of a 2-D array otherwise (dimensions, NULL rows, element order)."""
-    tgsis.create_feature_class(conn, "vec", "GEOMETRYCOLLECTION", cell_properties=PROPS)
+    _vec(conn, "vec")  # holes, odd bits, NULL vectors, a chunk of NULL only, an id beyond int4
     table = "public.vec_cellpros"
-    conn.execute(
-        f"INSERT INTO {table} (_geoid, _idx, normal, t, pair, rgb) "
-        "SELECT 1, i, ARRAY[sin(i), cos(i), i::double precision / 7], (i / 3.0)::real, ARRAY[i, -i], "
-        "ARRAY[i % 256, 0, 1]::real[] FROM generate_series(0, 2999) i WHERE i % 97 <> 5 AND i NOT IN (1024, 1025, 2047)"
-    )
-    for k, bits in enumerate(PATTERNS):
-        conn.execute(
-            f"INSERT INTO {table} VALUES (2, %s, ARRAY[%s, %s, '-0']::double precision[], '-0'::real, "
-            "ARRAY[-2147483648, 2147483647], ARRAY['NaN', '-0', 'Infinity']::real[])",
-            (k * 5, _double(bits), _double(PATTERNS[(k + 1) % 4])),
-        )
-    # members lacking a property: a NULL vector among present ones, NULL everywhere in a chunk
-    conn.execute(f"INSERT INTO {table} (_geoid, _idx, t) VALUES (2, 1, 1.5), (3, 5000, NULL)")
-    conn.execute(f"INSERT INTO {table} (_geoid, _idx, normal) VALUES (2, 2, ARRAY[1, 2, 3])")
-    conn.execute(f"INSERT INTO {table} VALUES (2, %s, ARRAY[1, 2, 3], 0, ARRAY[0, 0], ARRAY[0, 0, 0])", (2**40 + 3,))
     face = conn.cursor(binary=True).execute(f"SELECT _geoid, _idx, normal, rgb FROM {table} ORDER BY 1, 2").fetchall()
     conn.execute("SELECT tgsis.store_class_in_chunks('vec')")
     layout = _property_chunks.property_chunks(conn, get_feature_class(conn, "vec"), "vec_cellpros")
