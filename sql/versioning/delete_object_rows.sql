@@ -51,8 +51,9 @@ BEGIN
             EXECUTE format('SELECT array_agg(_idx ORDER BY _idx) FROM %I.%I WHERE %I = $1', p_schema, p_table, p_keyfield)
                INTO v_ids USING v_key;
             CONTINUE WHEN v_ids IS NULL;
-            EXECUTE format('SELECT tgsis.write_property_rows(%L, $1, $2, ARRAY[]::%I.%I[])',
-                           format('%I.%I', p_schema, p_table), p_schema, p_table)
+            -- (tgsis.write_property_rows is of a later layer, chunks/: named through %I, as merge_write_keyed_rows does)
+            EXECUTE format('SELECT tgsis.%I(%L, $1, $2, ARRAY[]::%I.%I[])',
+                           'write_property_rows', format('%I.%I', p_schema, p_table), p_schema, p_table)
               USING v_key, v_ids;
             v_deleted := v_deleted + cardinality(v_ids);
         END LOOP;
