@@ -231,6 +231,201 @@ def test_random_boxes_answer_as_numpy_by_index_and_by_scan(
     assert _ids_in_box(conn, geoid, axes, low, high, "scan") == expected
 
 
+def _moved(history: gmaps.GMap, points: np.ndarray) -> gmaps.GMap:
+    return gmaps.GMap(history.alpha, history.vertex, points, cell_properties=history.cell_properties)
+
+
+def _nan_maps() -> dict[str, np.ndarray]:
+    """The points of three model-5 maps: some points with a NaN, every point with one, a NaN point far off in y."""
+    points = _interpretations()[2].points
+    some = points.copy()
+    some[0, 0] = np.nan  # NaN on one axis
+    some[1] = np.nan  # on all
+    some[2] = [np.nan, 5000.0, -5000.0, 7.0]  # a NaN point whose other coordinates lie far outside
+    some[3, 0] = -0.0
+    every = points.copy()
+    every[:, 3] = np.nan  # no point has a position
+    far = points + [1000, 0, 0, 0]
+    far[5] = [np.nan, 5000.0, 0.0, 0.0]
+    return {"some": some, "every": every, "far": far}
+
+
+def _store(conn: Conn, fc: F.FeatureClass, points: np.ndarray) -> int:
+    """A model-5 map of these points: inserted finite (the client refuses NaN), its NaN points set by plain SQL, refreshed."""
+    history = _interpretations()[2]
+    geoid = G.insert_gmap(conn, fc, _moved(history, history.points), axes=["x", "y", "z", "knowledge"])
+    for vrtxid in np.flatnonzero(np.isnan(points).any(axis=1) | (points != history.points).any(axis=1)):
+        conn.execute(
+            "UPDATE tgsis.md_vertex SET coordinate = %s::double precision[] WHERE geoid = %s AND vrtxid = %s",
+            ([repr(float(c)) for c in points[vrtxid]], geoid, int(vrtxid)),
+        )
+    conn.execute("SELECT tgsis.refresh_geometry(%s)", (geoid,))
+    return geoid
+
+
+def _box_of(points: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """The extent tgsis.md_extent gives: the box of the points without a NaN coordinate; None without one."""
+    positioned = points[~np.isnan(points).any(axis=1)]
+    return (positioned.min(axis=0), positioned.max(axis=0)) if len(positioned) else None
+
+
+def _stored_boxes(conn: Conn, geoid: int) -> tuple[list[float] | None, list[float] | None]:
+    """The stored extent (low then high, every axis) and 3D bbox of a model-5 map."""
+    row = conn.execute(
+        "SELECT (SELECT array_agg(cube_ll_coord(m.extent, i) ORDER BY i) || array_agg(cube_ur_coord(m.extent, i) ORDER BY i)"
+        "          FROM generate_series(1, cube_dim(m.extent)) i),"
+        "       (SELECT array_agg(cube_ll_coord(g.bbox, i) ORDER BY i) || array_agg(cube_ur_coord(g.bbox, i) ORDER BY i)"
+        "          FROM generate_series(1, cube_dim(g.bbox)) i)"
+        "  FROM tgsis.md_gmap m JOIN tgsis.geometry g USING (geoid) WHERE geoid = %s",
+        (geoid,),
+    ).fetchone()
+    assert row is not None
+    return row[0], row[1]
+
+
+def _problems(conn: Conn, geoid: int) -> set[str]:
+    return {r[0] for r in conn.execute("SELECT problem FROM tgsis.check_geometry(%s)", (geoid,))}
+
+
+_STALE = "extent, bounding box or counts out of date (run tgsis.refresh_geometry)"
+
+
+def test_nan_points_take_no_part_in_the_extent_alike_at_insert_and_by_refresh(conn: Conn) -> None:
+    fc = _class(conn)
+    history = _interpretations()[2]
+    finite = G.insert_gmap(conn, fc, _moved(history, history.points), axes=["x", "y", "z", "knowledge"])
+    at_insert = _stored_boxes(conn, finite)  # by the client
+    conn.execute("SELECT tgsis.refresh_geometry(%s)", (finite,))
+    assert _stored_boxes(conn, finite) == at_insert and _problems(conn, finite) == set()  # by tgsis.md_extent
+    for points in _nan_maps().values():
+        geoid = _store(conn, fc, points)
+        box = _box_of(points)
+        expected: tuple[list[float] | None, list[float] | None] = (None, None)
+        if box is not None:
+            low, high = box
+            expected = ([*low, *high], [*low[:3], *high[:3]])
+        assert _stored_boxes(conn, geoid) == expected
+        # the NaN points are reported as such, the boxes are not stale
+        assert _problems(conn, geoid) == {"point without 4 finite coordinates"}
+        conn.execute("SELECT tgsis.refresh_geometry(%s)", (geoid,))
+        assert _stored_boxes(conn, geoid) == expected
+    conn.commit()
+
+
+def test_an_extent_stored_with_a_nan_is_stale_and_refreshed(conn: Conn) -> None:
+    """An extent computed the old way (a NaN counted as the largest value) is reported, and refresh_geometry mends it."""
+    fc = _class(conn)
+    points = _nan_maps()["some"]
+    geoid = _store(conn, fc, points)
+    expected = _stored_boxes(conn, geoid)
+    low, high = np.nanmin(points, axis=0), points.max(axis=0)  # 0.2.0's md_extent: max is NaN where a NaN is
+    assert np.isnan(high[0])
+    conn.execute(
+        "UPDATE tgsis.md_gmap SET extent = cube(%s::double precision[], %s::double precision[]) WHERE geoid = %s",
+        ([str(v) for v in low], [str(v) for v in high], geoid),
+    )
+    assert _STALE in _problems(conn, geoid)
+    conn.execute("SELECT tgsis.refresh_geometry(%s)", (geoid,))
+    assert _stored_boxes(conn, geoid) == expected
+    assert _STALE not in _problems(conn, geoid)
+    conn.commit()
+
+
+def _md_in_box(
+    conn: Conn, fc: F.FeatureClass, axes: list[str], low: list[float], high: list[float], scan: str
+) -> list[int]:
+    """tgsis.md_in_box's ids with the plan forced: by the extents' GiST index or by sequential scans."""
+    with conn.transaction():
+        index = "on" if scan == "index" else "off"
+        conn.execute(
+            f"SET LOCAL enable_seqscan = {'off' if scan == 'index' else 'on'}; SET LOCAL enable_indexscan = {index}; "
+            f"SET LOCAL enable_bitmapscan = {index}"
+        )
+        ids = G.md_in_box(conn, fc, axes, low, high)
+        plan = "\n".join(
+            r[0]
+            for r in conn.execute(
+                "EXPLAIN SELECT f._geoid FROM knowledge f JOIN tgsis.md_gmap m ON m.geoid = f._geoid "
+                "WHERE m.axes = '{x,y,z,knowledge}' AND m.extent && tgsis.md_query_box('{x,y,z,knowledge}', %s, %s, %s)",
+                (axes, low, high),
+            )
+        )
+    assert ("md_gmap_extent_idx" in plan) == (scan == "index"), plan
+    return ids
+
+
+@pytest.fixture
+def nan_maps(conn: Conn) -> tuple[F.FeatureClass, dict[int, tuple[np.ndarray, np.ndarray] | None]]:
+    """A class holding the maps of _nan_maps and one without NaN; each map's id and expected extent."""
+    fc = _class(conn)
+    boxes: dict[int, tuple[np.ndarray, np.ndarray] | None] = {}
+    for points in [*_nan_maps().values(), _interpretations()[2].points]:
+        boxes[_store(conn, fc, points)] = _box_of(points)
+    conn.commit()
+    return fc, boxes
+
+
+def _meeting(
+    boxes: dict[int, tuple[np.ndarray, np.ndarray] | None], axes: list[str], low: list[float], high: list[float]
+) -> list[int]:
+    """The maps whose extent meets the closed box, by numpy: a map without an extent meets none."""
+    found = []
+    for geoid, box in boxes.items():
+        if box is None:
+            continue
+        ks = [["x", "y", "z", "knowledge"].index(a) for a in axes]
+        if all(box[0][k] <= hi and lo <= box[1][k] for k, lo, hi in zip(ks, low, high)):
+            found.append(geoid)
+    return sorted(found)
+
+
+def test_md_in_box_answers_alike_by_index_and_by_scan_nan_in_no_extent(
+    conn: Conn, nan_maps: tuple[F.FeatureClass, dict[int, tuple[np.ndarray, np.ndarray] | None]]
+) -> None:
+    fc, boxes = nan_maps
+    for axes, low, high in (
+        (["y"], [4000.0], [6000.0]),  # only NaN points reach there
+        (["knowledge"], [-np.inf], [np.inf]),  # every map with a position, not the one without
+        (["x", "y", "z", "knowledge"], [-np.inf] * 4, [np.inf] * 4),
+        (["x"], [1.0], [1.0]),  # the face x = 1 of three extents
+        (["x"], [1001.0], [1001.0]),
+    ):
+        expected = _meeting(boxes, axes, low, high)
+        assert _md_in_box(conn, fc, axes, low, high, "index") == expected, (axes, low, high)
+        assert _md_in_box(conn, fc, axes, low, high, "scan") == expected, (axes, low, high)
+    every = [geoid for geoid, box in boxes.items() if box is None]
+    assert len(every) == 1 and every[0] not in _meeting(boxes, ["x"], [-np.inf], [np.inf])
+
+
+@settings(
+    max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow]
+)
+@given(
+    box=st.lists(
+        st.tuples(
+            st.sampled_from(["x", "y", "z", "knowledge"]),
+            _EDGES | st.floats(-200, 1100) | st.sampled_from([1000.0, 1001.0, 5000.0, 7.0]),
+            _EDGES | st.floats(-200, 1100) | st.sampled_from([1000.0, 1001.0, 5000.0, -5000.0]),
+        ),
+        min_size=1,
+        max_size=4,
+        unique_by=lambda b: b[0],
+    )
+)
+def test_random_boxes_find_maps_as_numpy_by_index_and_by_scan(
+    conn: Conn,
+    nan_maps: tuple[F.FeatureClass, dict[int, tuple[np.ndarray, np.ndarray] | None]],
+    box: list[tuple[str, float, float]],
+) -> None:
+    fc, boxes = nan_maps
+    axes = [b[0] for b in box]
+    low = [min(b[1], b[2]) for b in box]
+    high = [max(b[1], b[2]) for b in box]
+    expected = _meeting(boxes, axes, low, high)
+    assert _md_in_box(conn, fc, axes, low, high, "index") == expected
+    assert _md_in_box(conn, fc, axes, low, high, "scan") == expected
+
+
 def test_a_malformed_box_is_refused(conn: Conn) -> None:
     fc = _class(conn)
     with pytest.raises(tgsis.InvalidInputError, match="low <= high"):

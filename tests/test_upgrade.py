@@ -741,3 +741,34 @@ def test_the_upgrade_keeps_model_2s_time_tables_as_rows_and_a_new_install_stores
             "SELECT array_agg(tablename ORDER BY tablename) FROM tgsis.model_tables"
             " WHERE model = 2 AND tgsis.stored_in_chunks(tablename)"
         ).fetchone() == (list(_KEPT),), "a new install stores model 2's time tables in chunks"
+
+
+_MD_NAN = """
+SELECT tgsis.create_storage();
+WITH g AS (SELECT tgsis.new_geometry('GMAP', 'nan', NULL, 3, 0, p_timemodel => 'MULTIDIM') AS geoid),
+     m AS (INSERT INTO tgsis.md_gmap (geoid, dimension, embedding, axes) SELECT geoid, 0, 2, '{x,k}' FROM g)
+INSERT INTO tgsis.md_vertex SELECT geoid, i, c FROM g,
+       (VALUES (0, '{0,0}'::double precision[]), (1, '{NaN,5}'), (2, '{-1,0.5}')) AS p (i, c);
+SELECT tgsis.refresh_geometry(geoid) FROM tgsis.md_gmap;
+"""
+
+
+@pytest.mark.parametrize("method", ["extension", "sql"])
+def test_the_upgrade_measures_again_the_model_5_extents_0_2_0_measured_with_a_nan(
+    method: str, pg: TestServer, make_database: MakeDb, tmp_path: Path
+) -> None:
+    """0.2.0's md_extent counted a NaN as the largest value; the upgrade recomputes those boxes without NaN points."""
+    _upgrade_route(method, pg)
+    with psycopg.connect(make_database()) as conn:
+        tgsis.install(conn, method=method, sources=_frozen(tmp_path, OLD))  # type: ignore[arg-type]
+        conn.execute(_MD_NAN)
+        boxes = "SELECT m.extent::text, g.bbox::text FROM tgsis.md_gmap m JOIN tgsis.geometry g USING (geoid)"
+        assert conn.execute(boxes).fetchall() == [("(-1, 0),(NaN, 5)", "(-1, 0, 0),(NaN, 5, 0)")]
+        conn.commit()
+        assert _upgrade_now(conn, method) == []
+        assert conn.execute(boxes).fetchall() == [("(-1, 0),(0, 0.5)", "(-1, 0, 0),(0, 0.5, 0)")]
+        geoid = conn.execute("SELECT geoid FROM tgsis.md_gmap").fetchone()
+        assert geoid is not None
+        assert [r[0] for r in conn.execute("SELECT problem FROM tgsis.check_geometry(%s)", geoid)] == [
+            "point without 2 finite coordinates"
+        ]

@@ -4,7 +4,10 @@
 -- per set of axes among the class's features (features may name their axes
 -- differently; those lacking an asked axis are not in the box). An axis
 -- that no feature of the class has is refused (TG100, naming it and the
--- class's axes) rather than answered with no feature.
+-- class's axes) rather than answered with no feature. An extent is that of
+-- the points without a NaN coordinate (tgsis.md_extent): a feature none of
+-- whose points has a position has none and is in no box, by index and by
+-- scan alike (tests/test_gmap_multidim.py forces both plans).
 CREATE FUNCTION tgsis.md_in_box(p_class text, p_axes text[], p_low double precision[], p_high double precision[])
 RETURNS SETOF bigint
 LANGUAGE plpgsql
@@ -40,4 +43,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.md_in_box(text, text[], double precision[], double precision[]) IS
-    'model 5: ids of the features of a class of multiply indexed G-maps whose extent meets a box over some of their axes (unbounded on the others), by GiST index';
+    'model 5: ids of the features of a class of multiply indexed G-maps whose extent meets a box over some of their axes (unbounded on the others; the extent of the points without a NaN coordinate, none when no point has a position), by GiST index';

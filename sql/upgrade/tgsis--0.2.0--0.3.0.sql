@@ -360,6 +360,38 @@ BEGIN
 END
 $keys$;
 
+-- ---- issue40-md-nan: model 5's extents (tgsis.md_gmap.extent) and 3D boxes (tgsis.geometry.bbox) are of the
+-- points without a NaN coordinate, as tgsis.md_vertices_in_box finds none of those. 0.2.0's tgsis.md_extent
+-- counted a NaN as the largest value: a G-map whose points an SQL edit gave a NaN, measured then by
+-- tgsis.refresh_geometry, holds a box with a NaN (the client refuses NaN points: there is no other way in),
+-- which tgsis.md_in_box answers by the plan. Those boxes are measured again here. Where tgsis.md_gmap is
+-- versioned, each version and revision holds its own: none is rewritten, a WARNING names them (the
+-- refresh in each version is the owner's: tgsis.check_geometry reports them stale meanwhile).
+DO $md_nan$
+DECLARE
+    v_geoid  bigint;
+    v_geoids bigint[];
+BEGIN
+    IF to_regclass('tgsis.md_gmap') IS NULL THEN
+        RETURN;
+    END IF;
+    v_geoids := ARRAY(SELECT m.geoid FROM tgsis.md_gmap m JOIN tgsis.geometry g ON g.geoid = m.geoid
+                       WHERE m.extent::text LIKE '%NaN%' OR g.bbox::text LIKE '%NaN%' ORDER BY m.geoid);
+    IF cardinality(v_geoids) = 0 THEN
+        RETURN;
+    END IF;
+    IF EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename IN ('md_gmap', 'geometry')) THEN
+        RAISE WARNING 'the extents of % multiply indexed G-maps hold a NaN, as measured before 0.3.0', cardinality(v_geoids)
+            USING DETAIL = format('geoids %s; they are versioned and were left as they are.', array_to_string(v_geoids[1:20], ', ')),
+                  HINT = 'in each version holding them: SELECT tgsis.refresh_geometry(geoid) (tgsis.check_geometry reports them stale)';
+        RETURN;
+    END IF;
+    FOREACH v_geoid IN ARRAY v_geoids LOOP
+        PERFORM tgsis.refresh_geometry(v_geoid);
+    END LOOP;
+END
+$md_nan$;
+
 -- ---- issue40-default: model 1 is stored in chunks (docs/storage.md, "The storage switch"): its tables,
 -- with their data, versioned or not, switched by tgsis.store_in_chunks, which verifies that every version
 -- and revision sees the same rows before the row storage goes. After the blocks above (they read the

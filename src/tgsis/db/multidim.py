@@ -283,7 +283,11 @@ def fetch_md_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int
 def md_in_box(
     conn: Conn, feature_class: str | FeatureClass, axes: Sequence[str], low: Sequence[float], high: Sequence[float]
 ) -> list[int]:
-    """Ids of a class's multiply indexed G-maps whose extent meets a box over some of their axes (``tgsis.md_in_box``)."""
+    """Ids of a class's multiply indexed G-maps whose extent meets a box over some of their axes (``tgsis.md_in_box``).
+
+    The box is closed; an extent is that of the points without a NaN coordinate (a G-map whose points all have
+    one, which only plain SQL edits can make, is in no box).
+    """
     fc = gmap_class(conn, feature_class, "MULTIDIM")
     with reraise():
         rows = conn.execute(
