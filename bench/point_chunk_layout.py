@@ -30,6 +30,7 @@ class vector role's form: needs m fixed per table). Full scans: best of
 from __future__ import annotations
 
 import argparse
+import re
 import time
 from typing import Any
 
@@ -102,12 +103,14 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3)
     args = parser.parse_args()
     n = args.side**2
+    figures: dict[str, float] = {}  # the closing name: value lines
     with bench_database() as conn:
         setup(conn, args.side)
         for t in ("pts_rows", "pts_grid", "pts_morton"):
             row = conn.execute("SELECT pg_total_relation_size(%s::regclass)", (t,)).fetchone()
             assert row is not None
             print(f"bytes {t}: {row[0] / n:.1f} B/point")
+            figures[f"bytes_per_point_{t[4:]}"] = row[0] / n
         # the Morton table's ids differ from the rows'; its answers are compared through the grid cells' coordinates
         differ = conn.execute(
             "SELECT count(*) FROM pts_rows r FULL JOIN ({}) d USING (geoid, vrtxid) "
@@ -125,12 +128,14 @@ def main() -> None:
                 best = min(best, time.perf_counter() - start)
             base = base or best
             print(f"full scan {name}: {best:.3f} s ({best / base:.2f}x rows)")
+            figures[f"full_scan_{_slug(name)}_over_rows"] = best / base
         conn.commit()
         s = args.side
         for lo, hi in ((s // 10, s // 10 + 10), (s // 10, s // 10 + 100), (0, s // 2)):
             box = f"cube(ARRAY[{lo}, {lo}, '-Infinity']::float8[], ARRAY[{hi}, {hi}, 'Infinity']::float8[])"
             rows_q = f"SELECT coordinate FROM pts_rows WHERE cube(coordinate) <@ {box} AND geoid = 1"
             answers: dict[str, list[bytes]] = {}
+            times: dict[str, float] = {}
             for name, q in (
                 ("rows (GiST per point)", rows_q),
                 *(
@@ -155,9 +160,21 @@ def main() -> None:
                     assert row is not None
                     chunks = f", {row[0]} chunks read"
                 print(f"box {lo}..{hi} {name}: {best * 1000:.1f} ms, {len(got)} points{chunks}")
+                times[name] = best
             first = next(iter(answers.values()))
             print("  same points, bit for bit:", all(a == first for a in answers.values()))
+            rows_time = times["rows (GiST per point)"]
+            for name, best in times.items():
+                if name.startswith("chunks"):
+                    figures[f"box_{hi - lo}_{_slug(name.split()[1])}_over_rows"] = best / rows_time
             conn.commit()
+    for name, value in figures.items():
+        print(f"{name}: {value:.2f}")
+
+
+def _slug(name: str) -> str:
+    """A figure's name part: ``name``'s letters and digits, lower case, the rest one underscore."""
+    return re.sub(r"[^a-z0-9]+", "_", name.lower()).strip("_")
 
 
 if __name__ == "__main__":
