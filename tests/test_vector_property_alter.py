@@ -148,6 +148,17 @@ def test_a_versioned_class_adds_and_renames_in_every_chunk_version(conn: Conn) -
         conn.execute(RENAME.format(c=name))
     conn.commit()
     assert _ranked(conn, "vec") == _ranked(conn, "twin")
+    # the added vectors' CHECKs are named as on the twin's row storage (<table>_ver_<column>_check), so a wrong
+    # vector names the same constraint on both (23514)
+    names = []
+    for name in ("twin", "vec"):
+        with pytest.raises(psycopg.errors.CheckViolation) as caught:
+            conn.execute(
+                f"UPDATE public.{name}_cellpros SET dir = ARRAY[1, 2, 3] WHERE _geoid = {geoids[name]} AND _idx = 3"
+            )
+        conn.rollback()
+        names.append(str(caught.value.diag.constraint_name).replace(name, "X"))
+    assert names[0] == names[1] == "X_cellpros_ver_dir_check", names
     with tgsis.in_version(conn, "e1"):
         assert _ranked(conn, "vec") == _ranked(conn, "twin")
         for name in ("twin", "vec"):
