@@ -200,15 +200,17 @@ BEGIN
                   WHERE con.conrelid = v_storage AND con.contype = 'c'
                     AND con.conname <> v_reg.tablename || '_shape_holds_no_rows' ORDER BY con.conname LOOP
         EXECUTE format('SELECT EXISTS (SELECT FROM %s WHERE NOT _delete AND NOT (%s))', p_rows, v_con.expr) INTO v_more;
-        IF v_more THEN
+        IF v_more AND v_con.vector IS NOT NULL THEN
             RAISE EXCEPTION 'new row for relation "%" violates check constraint "%"', v_reg.tablename, v_con.conname
                 USING ERRCODE = 'check_violation', CONSTRAINT = v_con.conname, TABLE = v_reg.tablename, SCHEMA = v_reg.schemaname,
-                      DETAIL = CASE WHEN v_con.vector IS NULL THEN format('Written into %s by chunks; nothing was written.', v_chunk)
-                                    ELSE format('A value of vector property %I of %s is not NULL nor a one-dimensional array '
-                                                'from 1 of exactly %s values without NULL; nothing was written.',
-                                                v_con.vector, v_name, v_con.size) END,
-                      HINT = CASE WHEN v_con.vector IS NOT NULL
-                                  THEN 'give each vector property exactly its number of components, or NULL for no value' END;
+                      DETAIL = format('A value of vector property %I of %s is not NULL nor a one-dimensional array '
+                                      'from 1 of exactly %s values without NULL; nothing was written.',
+                                      v_con.vector, v_name, v_con.size),
+                      HINT = 'give each vector property exactly its number of components, or NULL for no value';
+        ELSIF v_more THEN
+            RAISE EXCEPTION 'new row for relation "%" violates check constraint "%"', v_reg.tablename, v_con.conname
+                USING ERRCODE = 'check_violation', CONSTRAINT = v_con.conname, TABLE = v_reg.tablename, SCHEMA = v_reg.schemaname,
+                      DETAIL = format('Written into %s by chunks; nothing was written.', v_chunk);
         END IF;
     END LOOP;
 
