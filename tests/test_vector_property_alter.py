@@ -97,9 +97,14 @@ def test_add_and_rename_in_chunks_write_what_the_conversion_of_rows_writes(conn:
     conn.commit()
     assert _face(conn, "vec") == _face(conn, "twin")
     assert sqlstate(conn, "SELECT tgsis.check_chunk_conversion('public.vec_cellpros')") == (None, "")
-    # a vector of another size is refused by name, as for the vectors the class was made with
-    state, _ = sqlstate(conn, "UPDATE public.vec_cellpros SET dir = ARRAY[1, 2, 3] WHERE _geoid = 1 AND _idx = 3")
-    assert state == "TG100"
+    # a vector of another size is refused as the twin's row table refuses it: 23514, the same constraint name
+    answers = []
+    for name in ("vec", "twin"):
+        with pytest.raises(psycopg.errors.CheckViolation) as caught:
+            conn.execute(f"UPDATE public.{name}_cellpros SET dir = ARRAY[1, 2, 3] WHERE _geoid = 1 AND _idx = 3")
+        conn.rollback()
+        answers.append(str(caught.value.diag.constraint_name).replace(name, "X"))
+    assert answers[0] == answers[1] == "X_cellpros_dir_check"
 
 
 def _ranked(conn: Conn, name: str) -> list[tuple[Any, ...]]:
@@ -143,6 +148,17 @@ def test_a_versioned_class_adds_and_renames_in_every_chunk_version(conn: Conn) -
         conn.execute(RENAME.format(c=name))
     conn.commit()
     assert _ranked(conn, "vec") == _ranked(conn, "twin")
+    # the added vectors' CHECKs are named as on the twin's row storage (<table>_ver_<column>_check), so a wrong
+    # vector names the same constraint on both (23514)
+    names = []
+    for name in ("twin", "vec"):
+        with pytest.raises(psycopg.errors.CheckViolation) as caught:
+            conn.execute(
+                f"UPDATE public.{name}_cellpros SET dir = ARRAY[1, 2, 3] WHERE _geoid = {geoids[name]} AND _idx = 3"
+            )
+        conn.rollback()
+        names.append(str(caught.value.diag.constraint_name).replace(name, "X"))
+    assert names[0] == names[1] == "X_cellpros_ver_dir_check", names
     with tgsis.in_version(conn, "e1"):
         assert _ranked(conn, "vec") == _ranked(conn, "twin")
         for name in ("twin", "vec"):

@@ -45,9 +45,9 @@
 -- by several statements: another session could change it in between), or
 -- without the row table's columns (of its types) or _delete, a
 -- NULL key, value or _delete, a negative id, a key twice (TG100), a row
--- breaking a CHECK constraint of the row table (23514, as the table would),
--- a vector property's value not NULL nor k values without NULL (TG100, by
--- name, before the CHECKs: the contract's answer for a wrong length). A
+-- breaking a CHECK constraint of the row table (23514 naming the constraint,
+-- as the table would: a vector property's value not NULL nor k values without
+-- NULL breaks its column's CHECK, and the detail says what it must be). A
 -- vector property (role 'vector') travels through the merge as its k
 -- components <name>#i, scalar columns like the others (its old chunk's
 -- slices arr[:][i:i] unnested), and is encoded again as the rows of a 2-D
@@ -190,33 +190,27 @@ BEGIN
                                   v_name, coalesce(array_to_string(v_notnull, ', '), 'none')),
                   HINT = 'give each key once, with all its values';
     END IF;
-    -- a vector property's value: k values, none NULL (the row table's CHECK), or NULL as a whole; refused by name
-    v_problem := NULL;
-    FOR v_con IN SELECT c.name, c.size FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'vector' ORDER BY c.colorder LOOP
-        EXECUTE format('SELECT EXISTS (SELECT FROM %1$s r WHERE NOT r._delete AND r.%2$I IS NOT NULL '
-                       'AND NOT coalesce(array_ndims(r.%2$I) = 1 AND array_lower(r.%2$I, 1) = 1 AND cardinality(r.%2$I) = %3$s '
-                       'AND array_position(r.%2$I, NULL) IS NULL, false))', p_rows, v_con.name, v_con.size) INTO v_more;
-        IF v_more THEN
-            v_problem := concat_ws(', ', v_problem, quote_ident(v_con.name));
-        END IF;
-    END LOOP;
-    IF v_problem IS NOT NULL THEN
-        RAISE EXCEPTION 'cannot write these rows into %: a value of % is not a vector of its size',
-                        v_name, v_problem
-            USING ERRCODE = 'TG100',
-                  DETAIL = format('A vector property''s value is NULL or a one-dimensional array from 1 of exactly its size (%s), '
-                                  'with no NULL element, as the row table''s CHECK requires.',
-                                  (SELECT string_agg(format('%I: %s', c.name, c.size), ', ' ORDER BY c.colorder)
-                                     FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'vector')),
-                  HINT = 'give each vector property exactly its number of components, or NULL for no value';
-    END IF;
-    FOR v_con IN SELECT con.conname, pg_get_expr(con.conbin, con.conrelid) AS expr
-                   FROM pg_constraint con WHERE con.conrelid = v_storage AND con.contype = 'c'
+    -- the row table's CHECKs, in name order as PostgreSQL checks them: 23514 naming the row table and the constraint
+    -- (diag's constraint, table and schema too), as the row table answers; a vector property's (a column CHECK of its
+    -- one column: k values from 1, none NULL) says what its value must be
+    FOR v_con IN SELECT con.conname, pg_get_expr(con.conbin, con.conrelid) AS expr, c.name AS vector, c.size
+                   FROM pg_constraint con
+                   LEFT JOIN pg_attribute a ON a.attrelid = con.conrelid AND con.conkey = ARRAY[a.attnum]
+                   LEFT JOIN tgsis.chunk_columns(p_table) c ON c.role = 'vector' AND c.name = a.attname
+                  WHERE con.conrelid = v_storage AND con.contype = 'c'
                     AND con.conname <> v_reg.tablename || '_shape_holds_no_rows' ORDER BY con.conname LOOP
         EXECUTE format('SELECT EXISTS (SELECT FROM %s WHERE NOT _delete AND NOT (%s))', p_rows, v_con.expr) INTO v_more;
-        IF v_more THEN
+        IF v_more AND v_con.vector IS NOT NULL THEN
             RAISE EXCEPTION 'new row for relation "%" violates check constraint "%"', v_reg.tablename, v_con.conname
-                USING ERRCODE = 'check_violation', DETAIL = format('Written into %s by chunks.', v_chunk);
+                USING ERRCODE = 'check_violation', CONSTRAINT = v_con.conname, TABLE = v_reg.tablename, SCHEMA = v_reg.schemaname,
+                      DETAIL = format('A value of vector property %I of %s is not NULL nor a one-dimensional array '
+                                      'from 1 of exactly %s values without NULL; nothing was written.',
+                                      v_con.vector, v_name, v_con.size),
+                      HINT = 'give each vector property exactly its number of components, or NULL for no value';
+        ELSIF v_more THEN
+            RAISE EXCEPTION 'new row for relation "%" violates check constraint "%"', v_reg.tablename, v_con.conname
+                USING ERRCODE = 'check_violation', CONSTRAINT = v_con.conname, TABLE = v_reg.tablename, SCHEMA = v_reg.schemaname,
+                      DETAIL = format('Written into %s by chunks; nothing was written.', v_chunk);
         END IF;
     END LOOP;
 

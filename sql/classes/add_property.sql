@@ -45,6 +45,9 @@ DECLARE
     v_count    bigint;
     v_what     text;
     v_row      tgsis.catalog;
+    v_check    text := '';  -- a vector's CHECK named as on the row storage when the table is in chunks (below)
+    v_n1       text;
+    v_n2       text;
 BEGIN
     IF p_kind IS NULL OR p_kind NOT IN ('feature', 'cell', 'instant') THEN
         RAISE EXCEPTION 'property kind % must be feature, cell or instant', coalesce(quote_literal(p_kind), 'NULL')
@@ -151,6 +154,24 @@ BEGIN
                   HINT = 'give p_default, e.g. ''0''';
     END IF;
 
+    -- a vector's CHECK: on a table in chunks it is added to <table>_shape, where PostgreSQL would name it
+    -- <table>_shape_<column>_check; it gets the name the row storage (<table>, or <table>_ver when versioned) would
+    -- give it, so that the writers of chunks name the same constraint as rows do (23514: tgsis.write_chunk_rows).
+    -- PostgreSQL's rule (makeObjectName): both names shortened, the longer first, to 56 bytes together
+    IF v_prop.size > 1 AND tgsis.stored_in_chunks(v_class.schemaname, v_table) THEN
+        v_n1 := v_table || CASE WHEN EXISTS (SELECT FROM tgsis.versioned_tables t
+                                              WHERE t.schemaname = v_class.schemaname AND t.tablename = v_table)
+                                THEN '_ver' ELSE '' END;
+        v_n2 := v_prop.name;
+        WHILE octet_length(v_n1) + octet_length(v_n2) > 56 LOOP
+            IF octet_length(v_n1) > octet_length(v_n2) THEN
+                v_n1 := left(v_n1, -1);
+            ELSE
+                v_n2 := left(v_n2, -1);
+            END IF;
+        END LOOP;
+        v_check := format(' CONSTRAINT %I', v_n1 || '_' || v_n2 || '_check');
+    END IF;
     -- the rows stored get the default; new rows give their values, as in a class registered with the property
     PERFORM tgsis.alter_class_table(v_class, v_table, ARRAY[
         format('ADD COLUMN %I %s%s DEFAULT %s%s', v_prop.name, v_type, CASE WHEN v_notnull THEN ' NOT NULL' ELSE '' END,
@@ -158,7 +179,7 @@ BEGIN
                     WHEN v_prop.size > 1 THEN format('array_fill(%L::%s, ARRAY[%s])', p_default, v_prop.typename, v_prop.size)
                     ELSE format('%L::%s', p_default, v_prop.typename) END,
                CASE WHEN v_prop.size > 1
-                    THEN format(' CHECK (array_ndims(%I) = 1 AND array_lower(%I, 1) = 1 AND cardinality(%I) = %s '
+                    THEN v_check || format(' CHECK (array_ndims(%I) = 1 AND array_lower(%I, 1) = 1 AND cardinality(%I) = %s '
                                 'AND array_position(%I, NULL) IS NULL)', v_prop.name, v_prop.name, v_prop.name, v_prop.size,
                                 v_prop.name)
                     ELSE '' END),
