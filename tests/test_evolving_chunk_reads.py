@@ -150,10 +150,12 @@ def test_fetch_evolving_reads_the_chunks_bit_for_bit_as_the_rows(conn: Conn, ver
     assert _reads(conn, on_chunks, again) == expected
 
 
-@pytest.mark.parametrize("edit", ["one instant", "NaN"])
+@pytest.mark.parametrize("edit", ["one instant", "NaN", "moved instant"])
 def test_rows_that_make_no_period_are_refused_as_on_rows(conn: Conn, monkeypatch: Any, edit: str) -> None:
-    """A node inserted at one geometry instant of its period only, or a NaN position (with a payload) written
-    through the face: InvalidGeometryError, the same message from the chunks as from the rows."""
+    """A node inserted at one geometry instant of its period only, a NaN position (with a payload) written
+    through the face, or a node's position at one instant moved to an instant ``timet`` does not list (the
+    count of rows still right: it was read misaligned, the next nodes' positions shifted):
+    InvalidGeometryError, the same message from the chunks as from the rows."""
     reads = _spy(monkeypatch)
     _class(conn, False)
     geoid = tgsis.insert_feature(conn, "evolving", _surface())
@@ -161,6 +163,11 @@ def test_rows_that_make_no_period_are_refused_as_on_rows(conn: Conn, monkeypatch
         conn.execute(
             "UPDATE tgsis.d4dvrtx SET y = %b WHERE geoid = %s AND timem = 1.0 AND timet = 5.0 AND nodeid = 1601",
             (NAN_PAYLOAD, geoid),
+        )
+    elif edit == "moved instant":
+        conn.execute(
+            "UPDATE tgsis.d4dvrtx SET timet = 3.0 WHERE geoid = %s AND timem = 1.0 AND timet = 2.0 AND nodeid = 2000",
+            (geoid,),
         )
     else:
         conn.execute("INSERT INTO tgsis.d4dvrtx VALUES (%s, 1.0, 2.0, 9000, 1.0, 1.5, 5e-324)", (geoid,))
@@ -173,7 +180,7 @@ def test_rows_that_make_no_period_are_refused_as_on_rows(conn: Conn, monkeypatch
         conn.rollback()
         messages.append(str(refused.value).replace(str(geoid), "<geoid>"))
     assert messages[0] == messages[1]
-    assert ("lacks node positions" if edit == "one instant" else "must be finite") in messages[0]
+    assert ("must be finite" if edit == "NaN" else "lacks node positions") in messages[0]
     assert "d4dvrtx" in reads
 
 

@@ -438,6 +438,23 @@ def _period_rows(
     ]
 
 
+def _period_nodes(ids: npt.NDArray[np.int64], instants: int) -> npt.NDArray[np.int64] | None:
+    """The node ids of a period whose position rows ``ids`` (ordered by geometry instant, then id) hold every node
+    at each of its ``instants`` geometry instants, ascending; None when they do not.
+
+    The same answer as ``np.unique(ids)`` with ``len(ids) == instants * len(unique)`` (every instant then has the
+    same set of nodes), without sorting or hashing every row: each instant's block must be the first one, whose
+    ids must ascend strictly.
+    """
+    per = len(ids) // instants if instants else 0
+    if len(ids) != instants * per:
+        return None
+    nodes = ids[:per]
+    if per and not (bool(np.all(nodes[1:] > nodes[:-1])) and bool(np.all(ids.reshape(instants, per) == nodes))):
+        return None
+    return nodes
+
+
 @checked
 def fetch_evolving(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> EvolvingSurface:
     """A model-3 feature as an :class:`~tgsis.temporal.EvolvingSurface`, with its cell and per-instant properties.
@@ -508,8 +525,8 @@ def fetch_evolving(conn: Conn, feature_class: str | FeatureClass, feature_id: in
     for start in np.unique(tm).tolist():
         times = tt[tm == start]
         rows = np.flatnonzero(vm == start)
-        nodes = np.unique(nid[rows])
-        if len(rows) != len(times) * len(nodes):
+        nodes = _period_nodes(nid[rows], len(times))
+        if nodes is None:
             raise InvalidGeometryError(
                 f"feature {feature_id}: the period starting at {start!r} lacks node positions",
                 hint=f"SELECT * FROM tgsis.check_geometry({feature_id})",
