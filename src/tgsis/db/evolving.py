@@ -442,9 +442,9 @@ def _period_nodes(ids: npt.NDArray[np.int64], instants: int) -> npt.NDArray[np.i
     """The node ids of a period whose position rows ``ids`` (ordered by geometry instant, then id) hold every node
     at each of its ``instants`` geometry instants, ascending; None when they do not.
 
-    The same answer as ``np.unique(ids)`` with ``len(ids) == instants * len(unique)`` (every instant then has the
-    same set of nodes), without sorting or hashing every row: each instant's block must be the first one, whose
-    ids must ascend strictly.
+    Each instant's block must equal the first one, whose ids must ascend strictly: no sort or hash of every row.
+    (The test before, ``np.unique(ids)`` and ``len(ids) == instants * len(unique)``, also let through rows at an
+    instant ``timet`` does not list when their count came out right, and read the positions misaligned.)
     """
     per = len(ids) // instants if instants else 0
     if len(ids) != instants * per:
@@ -460,7 +460,9 @@ def fetch_evolving(conn: Conn, feature_class: str | FeatureClass, feature_id: in
     """A model-3 feature as an :class:`~tgsis.temporal.EvolvingSurface`, with its cell and per-instant properties.
 
     Node and triangle ids become 0-based positions in each period (in id
-    order). Per-instant numeric properties come back as float64 or int64
+    order). With ``d4dvrtx`` and ``d4dtrgl`` stored in chunks, their chunks
+    are read and decoded here (docs/storage.md, "Snapshots at t"), the same
+    bits as their rows. Per-instant numeric properties come back as float64 or int64
     arrays (NULLs as NaN).
 
     Raises
