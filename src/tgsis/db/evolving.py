@@ -26,7 +26,7 @@ from psycopg import sql
 from tgsis import datamodels
 from tgsis._series import check_time
 from tgsis.arguments import checked
-from tgsis.db._chunk_transfer import write_instants
+from tgsis.db._chunk_transfer import chunked_tables, instant_layout, instant_rows, write_instants
 from tgsis.db._continuity import check_continuity, checked_tolerance
 from tgsis.db._temporal_common import (
     Conn,
@@ -397,12 +397,72 @@ def delete_period(conn: Conn, feature_id: int, start: float) -> bool:
     return bool(row and row[0])
 
 
+def _period_rows(
+    conn: Conn,
+    table: str,
+    geoid: int,
+    chunked: frozenset[str],
+    keys: Sequence[str],
+    columns: Sequence[str],
+    types: Sequence[str],
+) -> list[npt.NDArray[Any]]:
+    """Every row of ``tgsis.<table>`` (``d4dtrgl``, ``d4dvrtx``) of one feature, ``[*keys, id, *columns]`` (n,) each
+    ordered by (keys, id): from its chunks, decoded here (:func:`~tgsis.db._chunk_transfer.instant_rows`, as
+    model 2's ``fetch_series`` reads them), when the table is stored in chunks and the role may read them; else
+    its rows through the face, packed by the server (:func:`ordered_copy`).
+
+    ``keys`` are the table's instant keys (``timem``; ``timem, timet``), ``columns`` the local id then the values.
+    """
+    layout = instant_layout(conn, table, chunked)
+    if layout is None:
+        return ordered_copy(
+            conn,
+            tgsis_table(table),
+            [*keys, *columns],
+            [*(["float8"] * len(keys)), *types],
+            geoid,
+            keys=len(keys) + 1,
+        )
+    rows = instant_rows(conn, layout, [geoid])
+    # (geoid, *instant keys) ascending: no time is NaN (tgsis.check_time), and -0.0 and 0.0 are one key
+    order = sorted(rows, key=lambda k: k[1:])
+    counts = [len(rows[k].ids) for k in order]
+    names = columns[1:]
+    return [
+        *(np.repeat(np.asarray([k[1 + i] for k in order], dtype=np.float64), counts) for i in range(len(keys))),
+        np.concatenate([np.empty(0, dtype=np.int64), *(rows[k].ids for k in order)]),
+        *(
+            np.concatenate([np.empty(0, dtype=layout.columns.dtype(c)), *(rows[k].columns[c] for k in order)])
+            for c in names
+        ),
+    ]
+
+
+def _period_nodes(ids: npt.NDArray[np.int64], instants: int) -> npt.NDArray[np.int64] | None:
+    """The node ids of a period whose position rows ``ids`` (ordered by geometry instant, then id) hold every node
+    at each of its ``instants`` geometry instants, ascending; None when they do not.
+
+    Each instant's block must equal the first one, whose ids must ascend strictly: no sort or hash of every row.
+    (The test before, ``np.unique(ids)`` and ``len(ids) == instants * len(unique)``, also let through rows at an
+    instant ``timet`` does not list when their count came out right, and read the positions misaligned.)
+    """
+    per = len(ids) // instants if instants else 0
+    if len(ids) != instants * per:
+        return None
+    nodes = ids[:per]
+    if per and not (bool(np.all(nodes[1:] > nodes[:-1])) and bool(np.all(ids.reshape(instants, per) == nodes))):
+        return None
+    return nodes
+
+
 @checked
 def fetch_evolving(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -> EvolvingSurface:
     """A model-3 feature as an :class:`~tgsis.temporal.EvolvingSurface`, with its cell and per-instant properties.
 
     Node and triangle ids become 0-based positions in each period (in id
-    order). Per-instant numeric properties come back as float64 or int64
+    order). With ``d4dvrtx`` and ``d4dtrgl`` stored in chunks, their chunks
+    are read and decoded here (docs/storage.md, "Snapshots at t"), the same
+    bits as their rows. Per-instant numeric properties come back as float64 or int64
     arrays (NULLs as NaN).
 
     Raises
@@ -426,21 +486,24 @@ def fetch_evolving(conn: Conn, feature_class: str | FeatureClass, feature_id: in
         if row is None:
             raise NotFoundError(f"feature {feature_id} of class {fc.name} does not exist")
         tm, tt = ordered_copy(conn, tgsis_table("timet"), ["timem", "timet"], ["float8", "float8"], feature_id)
-        cm, _, a, b, c = ordered_copy(
+        chunked = chunked_tables(conn)
+        cm, _, a, b, c = _period_rows(
             conn,
-            tgsis_table("d4dtrgl"),
-            ["timem", "trglid", "nodeid1", "nodeid2", "nodeid3"],
-            ["float8", "int8", "int8", "int8", "int8"],
+            "d4dtrgl",
             feature_id,
-            keys=2,
+            chunked,
+            ["timem"],
+            ["trglid", "nodeid1", "nodeid2", "nodeid3"],
+            ["int8", "int8", "int8", "int8"],
         )
-        vm, vt, nid, x, y, z = ordered_copy(
+        vm, vt, nid, x, y, z = _period_rows(
             conn,
-            tgsis_table("d4dvrtx"),
-            ["timem", "timet", "nodeid", "x", "y", "z"],
-            ["float8", "float8", "int8", "float8", "float8", "float8"],
+            "d4dvrtx",
             feature_id,
-            keys=3,
+            chunked,
+            ["timem", "timet"],
+            ["nodeid", "x", "y", "z"],
+            ["int8", "float8", "float8", "float8"],
         )
         props = (
             ordered_copy(
@@ -464,8 +527,8 @@ def fetch_evolving(conn: Conn, feature_class: str | FeatureClass, feature_id: in
     for start in np.unique(tm).tolist():
         times = tt[tm == start]
         rows = np.flatnonzero(vm == start)
-        nodes = np.unique(nid[rows])
-        if len(rows) != len(times) * len(nodes):
+        nodes = _period_nodes(nid[rows], len(times))
+        if nodes is None:
             raise InvalidGeometryError(
                 f"feature {feature_id}: the period starting at {start!r} lacks node positions",
                 hint=f"SELECT * FROM tgsis.check_geometry({feature_id})",
