@@ -11,7 +11,10 @@ primary key (``public.plain``), the same key read and the same statements; both 
 are made by each writing transaction and dropped at its commit, ``ON COMMIT DROP``): the best of
 ``--rounds`` rounds of ``--transactions`` transactions each, a round's mean per transaction, and the same
 on the plain table; ``--one-row-only`` measures only that (run it with another checkout's sources on
-``PYTHONPATH`` to compare two versions of the face in one sitting). This was tests/test_chunk_face.py's measuring
+``PYTHONPATH`` to compare two versions of the face in one sitting). "W2", a key-moving ``UPDATE`` through the
+face (the row trigger's path that keeps the old key gone): a one-row key move per transaction (the vertex moved
+to a new id and back, best of ``--rounds`` rounds, also with ``--one-row-only``) and a 10,000-row
+``UPDATE ... SET vrtxid = vrtxid + n`` (its rows moved to new chunks), each against the plain table. This was tests/test_chunk_face.py's measuring
 test until 2026-12-06; the test now checks the same on 20,000 vertices. Prints ``name: value`` lines.
 
     .venv/bin/python bench/chunk_face.py [--n 1000000] [--rounds 5] [--transactions 20] [--one-row-only]
@@ -68,17 +71,37 @@ def main() -> None:
                 best = min(best, (time.perf_counter() - start) / args.transactions)
             return best
 
+        def key_move_transactions(table: str) -> float:
+            """The best round's mean time of a one-row key-moving UPDATE transaction (W2, committed) on ``table``."""
+            best = float("inf")
+            for _ in range(args.rounds):
+                start = time.perf_counter()
+                for _ in range(args.transactions):  # there and back: two transactions
+                    for new, old in ((3 * n, key), (key, 3 * n)):
+                        done = conn.execute(
+                            f"UPDATE {table} SET vrtxid = %s WHERE geoid = 1 AND vrtxid = %s",  # noqa: S608
+                            (new, old),
+                        ).rowcount
+                        conn.commit()
+                        assert done == 1
+                best = min(best, (time.perf_counter() - start) / (2 * args.transactions))
+            return best
+
         face_tx = one_row_transactions("tgsis.vrtx")
         plain_tx = one_row_transactions("public.plain")
+        face_w2_tx = key_move_transactions("tgsis.vrtx")
+        plain_w2_tx = key_move_transactions("public.plain")
         print(
             f"one-row UPDATE transaction, {n}-vertex object (best of {args.rounds} rounds of {args.transactions}): "
             f"through the face {face_tx * 1000:.1f} ms, of the plain table {plain_tx * 1000:.2f} ms"
         )
         print(f"face_one_row_update_tx_ms: {face_tx * 1000:.1f}")
         print(f"plain_one_row_update_tx_ms: {plain_tx * 1000:.2f}")
+        print(f"face_one_row_key_move_tx_ms: {face_w2_tx * 1000:.1f}")
+        print(f"plain_one_row_key_move_tx_ms: {plain_w2_tx * 1000:.2f}")
         if args.one_row_only:
             return
-        want = [(float(key), -float(key), 0.5)]
+        want = [(float(key), -float(key), float(args.transactions - 1))]  # z: the one-row UPDATEs' last
         face_read = "SELECT x, y, z FROM tgsis.vrtx WHERE geoid = 1 AND vrtxid = %s"
         assert conn.execute(face_read, (key,)).fetchall() == want
         assert conn.execute("SELECT * FROM tgsis.vertex(1, %s)", (key,)).fetchall() == want
@@ -107,6 +130,11 @@ def main() -> None:
         insert = f"INSERT INTO {{t}} SELECT 1, i, i, -i, 0.25 FROM generate_series({n}::bigint, {n + inserted - 1}) i"
         face_insert = statement(insert, "tgsis.vrtx", inserted)
         plain_insert = statement(insert, "public.plain", inserted)
+        # W2: the UPDATE moving its rows' keys (to new ids past the inserted ones: new chunks)
+        move = (
+            f"UPDATE {{t}} SET vrtxid = vrtxid + {2 * n} WHERE geoid = 1 AND vrtxid >= {rows} AND vrtxid < {2 * rows}"
+        )
+        face_move, plain_move = statement(move, "tgsis.vrtx", rows), statement(move, "public.plain", rows)
         delete = f"DELETE FROM {{t}} WHERE geoid = 1 AND vrtxid < {rows}"
         face_delete, plain_delete = statement(delete, "tgsis.vrtx", rows), statement(delete, "public.plain", rows)
         same = "SELECT geoid, vrtxid, float8send(x), float8send(y), float8send(z) FROM {t} ORDER BY 1, 2"
@@ -124,6 +152,9 @@ def main() -> None:
         print(
             f"{inserted}-row INSERT ... SELECT through the face {face_insert:.2f} s, into the plain table {plain_insert:.2f} s"
         )
+        print(
+            f"{rows}-row key-moving UPDATE (W2) through the face {face_move:.2f} s, of the plain table {plain_move:.2f} s"
+        )
         print(f"{rows}-row DELETE through the face {face_delete:.2f} s, of the plain table {plain_delete:.2f} s")
         print(f"face_one_vertex_ms: {face * 1000:.1f}")
         print(f"vertex_function_ms: {function * 1000:.2f}")
@@ -134,6 +165,8 @@ def main() -> None:
         print(f"face_update_vs_plain: {through_face / plain_update:.1f}")
         print(f"face_insert_select_s: {face_insert:.2f}")
         print(f"face_insert_select_vs_plain: {face_insert / plain_insert:.1f}")
+        print(f"face_key_move_update_s: {face_move:.2f}")
+        print(f"face_key_move_update_vs_plain: {face_move / plain_move:.1f}")
         print(f"face_delete_s: {face_delete:.2f}")
         print(f"face_delete_vs_plain: {face_delete / plain_delete:.1f}")
 

@@ -233,6 +233,11 @@ def test_a_switched_database_is_dumped_and_restored_whole(
         ).fetchone() == (True, "tgsis.point_chunk")
         assert _everything_seen(copy) == before
         assert copy.execute("SELECT count(*) FROM tgsis.vrtx_shape").fetchone() == (0,)
+        # its row trigger is still its own generated function, whose static SQL names the work tables by the
+        # table's name (a view's oid would have changed with the restore)
+        assert copy.execute(
+            "SELECT tgfoid::regprocedure::text FROM pg_trigger WHERE tgrelid = 'tgsis.vrtx'::regclass AND tgname = 'tgsis_chunk_face'"
+        ).fetchone() == ("tgsis.vrtx_face_row()",)
         # the restored face is written as before: in a child version, through today's names
         tgsis.create_version(copy, "after restore")
         copy.commit()
@@ -244,3 +249,13 @@ def test_a_switched_database_is_dumped_and_restored_whole(
         copy.commit()
         kept = copy.execute("SELECT x FROM tgsis.vertex(%s, 40)", (fault_clone,)).fetchone()
         assert moved is not None and kept is not None and moved[0] == kept[0] + 1
+        # and a key-moving UPDATE, a DELETE and an INSERT, each through the row function's static SQL
+        with tgsis.in_version(copy, "after restore"):
+            copy.execute("UPDATE tgsis.vrtx SET vrtxid = 100000 WHERE geoid = %s AND vrtxid = 40", (fault_clone,))
+            copy.execute("DELETE FROM tgsis.vrtx WHERE geoid = %s AND vrtxid = 41", (fault_clone,))
+            copy.execute("INSERT INTO tgsis.vrtx VALUES (%s, 100001, 1, 2, 3)", (fault_clone,))
+            copy.commit()
+            assert copy.execute(
+                "SELECT array_agg(vrtxid ORDER BY vrtxid) FROM tgsis.vrtx WHERE geoid = %s AND vrtxid IN (40, 41, 100000, 100001)",
+                (fault_clone,),
+            ).fetchone() == ([100000, 100001],)

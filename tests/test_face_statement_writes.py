@@ -1,6 +1,6 @@
 """Writes of many rows through the relational face: one rewrite per touched chunk per statement (issue 40).
 
-On chunks, ``tgsis.vrtx`` is a view whose row trigger (``tgsis.chunk_face_queue``) only keeps each
+On chunks, ``tgsis.vrtx`` is a view whose row trigger (its generated ``tgsis.vrtx_face_row``) only keeps each
 row, and whose statement trigger (``tgsis.chunk_face_write``) checks and writes all of them when the
 statement ends (docs/storage.md, "The relational face: views with today's names"). Before, an INSERT
 or a DELETE rewrote its chunk for every row. What must hold is what today's row storage does, so every
@@ -98,9 +98,7 @@ def test_insert_update_delete_of_thousands_of_rows_write_each_chunk_once(
     # DEFAULT never saw them, and the transaction's tables of kept rows are gone with it (ON COMMIT DROP)
     assert _count(conn, geoid, f"vrtxid >= {FIRST}") == 0
     if db_storage == "chunks":
-        kept = conn.execute(
-            "SELECT to_regclass(format('pg_temp.%I', 'tgsis_face_rows_' || 'tgsis.vrtx'::regclass::oid))"
-        ).fetchone()
+        kept = conn.execute("SELECT to_regclass(tgsis.chunk_face_work('vrtx', 'rows'))").fetchone()
         assert kept == (None,)
     conn.rollback()
 
@@ -410,3 +408,76 @@ def test_every_order_of_writes_on_one_key_in_one_statement_answers_as_the_row_vi
     defect = [(a, b) for a, b in differing if a[0] == "vdu" and a[2] == "40001" and not isinstance(b, str)]
     assert [b[0] for _, b in defect] == [(1, 1, 0)] * len(defect)
     assert [d for d in differing if d not in defect] == []
+
+
+def test_the_row_trigger_is_the_face_s_own_static_function(conn: Conn, fault_clone: int, db_storage: str) -> None:
+    """The face's row trigger is its own function, generated with static SQL by tgsis.create_chunk_face
+    (tgsis.vrtx_face_row: a name from the table's, stable across pg_dump/restore): no statement planned per row;
+    the storage owner's, definer's rights with its search_path pinned, not PUBLIC's. Each row written is one call
+    of it; the generic tgsis.chunk_face_queue runs once per statement only. The answers are the other tests'.
+    Fails with the generic row function (its calls counted per row, no tgsis.vrtx_face_row)."""
+    if db_storage != "chunks":
+        pytest.skip("the face and its trigger exist on chunks only")
+    row = conn.execute(
+        "SELECT t.tgfoid::regprocedure::text, p.prosecdef, 'search_path=pg_catalog, pg_temp' = ANY (p.proconfig), "
+        "p.proowner = c.relowner, NOT EXISTS (SELECT FROM aclexplode(p.proacl) a WHERE a.grantee = 0), "
+        "p.prosrc !~* '\\mEXECUTE\\M|format\\(' "
+        "FROM pg_trigger t JOIN pg_proc p ON p.oid = t.tgfoid, pg_class c "
+        "WHERE t.tgrelid = 'tgsis.vrtx'::regclass AND t.tgname = 'tgsis_chunk_face' AND c.oid = 'tgsis.vrtx_chunk'::regclass"
+    ).fetchone()
+    assert row == ("tgsis.vrtx_face_row()", True, True, True, True, True)
+    geoid = fault_clone
+    calls = (
+        "SELECT coalesce(sum(calls) FILTER (WHERE funcname = 'vrtx_face_row'), 0), "
+        "coalesce(sum(calls) FILTER (WHERE funcname = 'chunk_face_queue'), 0) "
+        "FROM pg_stat_xact_user_functions WHERE schemaname = 'tgsis'"
+    )
+    with tgsis.in_version(conn, "e1"):
+        conn.commit()
+        conn.execute("SET track_functions = 'all'")
+        before = conn.execute(calls).fetchone()
+        assert conn.execute("UPDATE tgsis.vrtx SET z = z + 1 WHERE geoid = %s AND vrtxid < 5", (geoid,)).rowcount == 5
+        assert conn.execute(_insert(FIRST, FIRST + 2), (geoid,)).rowcount == 3
+        after = conn.execute(calls).fetchone()
+        assert before is not None and after is not None
+        assert (after[0] - before[0], after[1] - before[1]) == (8, 2)  # 8 rows, 2 statements
+        conn.rollback()
+
+
+def test_the_row_function_is_made_and_dropped_with_the_face(conn: Conn, db_storage: str) -> None:
+    """The way back into rows drops the face's generated row function with the face (model tables, a class's
+    property table), the way into chunks makes it again, dropping the class drops it: none is left behind."""
+    if db_storage != "chunks":
+        pytest.skip("the face and its row function exist on chunks only")
+
+    def made(function: str) -> bool:
+        row = conn.execute("SELECT to_regprocedure(%s) IS NOT NULL", (function,)).fetchone()
+        assert row is not None
+        return bool(row[0])
+
+    assert made("tgsis.vrtx_face_row()")
+    conn.execute("SELECT tgsis.store_in_rows('vrtx')")
+    conn.commit()
+    assert not made("tgsis.vrtx_face_row()")
+    conn.execute("SELECT tgsis.store_in_chunks('vrtx')")
+    conn.commit()
+    assert made("tgsis.vrtx_face_row()")
+    tgsis.create_feature_class(conn, "rock", "SURFACE", cell_properties=[("porosity", "double precision")])
+    conn.commit()
+    table = conn.execute(
+        "SELECT format('%I.%I', schemaname, cellprotable) FROM tgsis.catalog WHERE classname = 'rock'"
+    ).fetchone()
+    assert table is not None
+    function = f"{table[0]}_face_row()"
+    assert not made(function)
+    for step, there in (
+        ("store_class_in_chunks", True),
+        ("store_class_in_rows", False),
+        ("store_class_in_chunks", True),
+    ):
+        conn.execute(f"SELECT tgsis.{step}('rock')")  # noqa: S608
+        conn.commit()
+        assert made(function) == there, step
+    conn.execute("SELECT tgsis.drop_feature_class('rock')")
+    conn.commit()
+    assert not made(function)

@@ -98,9 +98,9 @@ BEGIN
     -- this transaction's own work tables of the face's writes (tgsis.chunk_face_write: of the face's row type,
     -- emptied at each statement's end, ON COMMIT DROP) go with it; another session's exist only while its writing
     -- transaction is open, and the LOCK above waited for it to end
-    EXECUTE format('DROP TABLE IF EXISTS pg_temp.%I, pg_temp.%I, pg_temp.%I, pg_temp.%I', 'tgsis_face_now_' || v_face::oid,
-                   'tgsis_face_queue_' || v_face::oid, 'tgsis_face_rows_' || v_face::oid, 'tgsis_face_dels_' || v_face::oid);
-    EXECUTE format('DROP VIEW %s', v_face);  -- (its triggers with it)
+    EXECUTE format('DROP TABLE IF EXISTS %s, %s, %s, %s', tgsis.chunk_face_work(p_table, 'now'),
+                   tgsis.chunk_face_work(p_table, 'queue'), tgsis.chunk_face_work(p_table, 'rows'), tgsis.chunk_face_work(p_table, 'dels'));
+    EXECUTE format('DROP VIEW %s', v_face);  -- (its triggers with it; its row function is replaced by tgsis.create_chunk_face)
     EXECUTE format('DROP VIEW %s', tgsis.chunk_relation(p_table, '_chunk_rows'));
 
     -- 3. the chunk table: added columns first (their length from an array there before), renamed, dropped

@@ -1,12 +1,13 @@
--- tgsis.chunk_face_queue(): the row-level INSTEAD OF trigger of a chunk table's face (tgsis.create_chunk_face),
--- and its BEFORE statement trigger; TG_ARGV[0] the row table.
+-- tgsis.chunk_face_queue(): the BEFORE statement trigger of a chunk table's face (tgsis.create_chunk_face);
+-- TG_ARGV[0] the row table. The face's rows are kept by its own row function, generated with static SQL
+-- by tgsis.create_chunk_face (<schema>.<table>_face_row: FOR EACH ROW, INSTEAD OF).
 -- docs/storage.md, "The relational face over chunks": a write through the face is
 -- written when its statement ends, by tgsis.chunk_face_write (the face's AFTER
 -- statement trigger), which checks and writes all the statement's rows at once,
--- rewriting each touched chunk once. Per row this trigger only keeps the row: one
--- INSERT into the session's pg_temp.tgsis_face_rows_<view oid> (the operation,
--- the new and the old row; a DELETE's row read into pg_temp.tgsis_face_dels_<view
--- oid>), whose columns are of the face's own row type, each row numbered in the
+-- rewriting each touched chunk once. Per row the row function only keeps the row: one
+-- INSERT into the session's table of rows (tgsis.chunk_face_work(table, 'rows'): the operation,
+-- the new and the old row; a DELETE's row read into the table of deleted rows, kind 'dels'),
+-- whose columns are of the face's own row type, each row numbered in the
 -- statement's order (pg_temp.tgsis_face_seq: the flush needs the order of a
 -- writable CTE's delete and insert of one key): the
 -- rows are kept TYPED, never as text (a float's text form loses a NaN's payload
@@ -16,18 +17,16 @@
 -- whole statement (nothing written). A row a DELETE meets twice (a join
 -- matching it twice) is kept and counted once, as a table deletes it once
 -- (a unique index on the row's key in the table of deleted rows, its own so
--- that an INSERT's or UPDATE's row pays no index: each row's INSERT is dynamic
--- SQL, planned each time, and ON CONFLICT's planning was a third of a DELETE's
--- row; the face has one row per key, so a second row of one key is the same row).
+-- that an INSERT's or UPDATE's row pays no index; the face has one row per key,
+-- so a second row of one key is the same row).
 -- A row of a key the statement deleted, or moved away, before (an earlier
 -- writable WITH query) is skipped, counted 0, as the row view skips it: a
 -- DELETE's by that unique index, an UPDATE's by one probe of it, made only
 -- once the statement deletes or has kept rows before the sub-statement (the
--- setting tgsis.face_deleted_<view oid>, which the flush clears); each skipped
--- row is kept as an event ('S', 'X') for the flush's order of the statement's
--- writes of the key. The row key's columns are the trigger's arguments after
--- the row table (tgsis.create_chunk_face: no catalog query per row).
--- BEFORE each INSERT/UPDATE/DELETE statement (TG_LEVEL = 'STATEMENT') it makes
+-- setting tgsis.chunk_face_work(table, 'deleted'), which the flush clears); each
+-- skipped row is kept as an event ('S', 'X') for the flush's order of the
+-- statement's writes of the key.
+-- BEFORE each INSERT/UPDATE/DELETE statement (TG_LEVEL = 'STATEMENT', here) it makes
 -- the tables when the transaction has none (ON COMMIT DROP: made again by each
 -- transaction that writes through the face, gone at its COMMIT or ROLLBACK, and
 -- with a ROLLBACK TO a savepoint that made them; a later statement of the same
@@ -52,16 +51,12 @@ SECURITY DEFINER
 SET search_path = pg_catalog, pg_temp
 AS $$
 DECLARE
-    v_rows    text := format('pg_temp.%I', 'tgsis_face_rows_' || TG_RELID);
-    v_dels    text := format('pg_temp.%I', 'tgsis_face_dels_' || TG_RELID);
+    v_rows    text := tgsis.chunk_face_work(TG_ARGV[0], 'rows');
+    v_dels    text := tgsis.chunk_face_work(TG_ARGV[0], 'dels');
     v_seq     text := 'pg_temp.tgsis_face_seq';  -- the order of the rows kept, across both tables and every face
     v_tab     text;
     v_keycols text[];
-    v_n       bigint;
-    v_flag    text := 'tgsis.face_deleted_' || TG_RELID;  -- '1': the statement deletes (or moved away) keys
-    v_k       text;
-    v_old     text;      -- the key of the row $1, as a condition on the deleted rows' d.o
-    v_gone    boolean;
+    v_flag    text := tgsis.chunk_face_work(TG_ARGV[0], 'deleted');  -- '1': the statement deletes (or moved away) keys
     v_pending boolean;
 BEGIN
     IF TG_LEVEL = 'STATEMENT' THEN
@@ -94,11 +89,11 @@ BEGIN
         -- the keys a statement deleted, or moved away, are gone for its later sub-statements (writable WITH
         -- queries; a statement nested in one), as the row view has them gone row by row (PostgreSQL's rule for a
         -- row changed by the same command: skipped): once a DELETE begins, or a sub-statement begins after others
-        -- whose rows are kept, not yet written, the setting tgsis.face_deleted_<view oid> tells the UPDATE rows to
+        -- whose rows are kept, not yet written, the setting (tgsis.chunk_face_work(table, 'deleted')) tells the UPDATE rows to
         -- look their key up among the deleted rows (one index probe; a plain statement pays nothing per row), and
         -- the key moves of the UPDATE rows kept are added to them (set-based, once per sub-statement). PostgreSQL
         -- fires this trigger once per query for each of INSERT, UPDATE, DELETE: a second UPDATE sub-statement
-        -- after one moving keys does not come here; the UPDATE row that moves a key marks it itself (below), so
+        -- after one moving keys does not come here; the UPDATE row that moves a key marks it itself (the row function), so
         -- its later rows of that key are skipped all the same (docs/storage.md)
         EXECUTE format('SELECT EXISTS (SELECT FROM %s) OR EXISTS (SELECT FROM %s)', v_rows, v_dels) INTO v_pending;
         IF v_pending THEN
@@ -114,68 +109,12 @@ BEGIN
         END IF;
         RETURN NULL;
     END IF;
-    IF TG_OP = 'INSERT' THEN
-        EXECUTE format('INSERT INTO %s VALUES (''I'', $1, NULL, nextval(%L))', v_rows, v_seq) USING NEW;
-        RETURN NEW;
-    END IF;
-    IF TG_OP = 'UPDATE' THEN
-        IF current_setting(v_flag, true) = '1' THEN
-            -- the row view skips an UPDATE of a row its statement deleted (or moved away) before: counted 0, kept
-            -- only as the event 'S', so that the flush can tell the order of the statement's writes of the key (two
-            -- UPDATEs of it: 21000; the key inserted again in between: 27000, the row read is not the row there).
-            -- The row key's columns: the face's trigger arguments after the row table (tgsis.create_chunk_face),
-            -- else (a face made before they were passed) from the catalog
-            IF TG_NARGS > 1 THEN
-                v_keycols := TG_ARGV[1:TG_NARGS - 1];
-            ELSE
-                v_keycols := tgsis.chunk_row_key(TG_ARGV[0]);
-            END IF;
-            FOREACH v_k IN ARRAY v_keycols LOOP
-                v_old := concat_ws(' AND ', v_old, format('(d.o).%1$I = ($1).%1$I', v_k));
-            END LOOP;
-            EXECUTE format('SELECT true FROM %s d WHERE %s', v_dels, v_old) INTO v_gone USING OLD;
-            IF v_gone THEN
-                EXECUTE format('INSERT INTO %s VALUES (''S'', NULL, $1, nextval(%L))', v_rows, v_seq) USING OLD;
-                RETURN NULL;
-            END IF;
-        END IF;
-        IF TG_NARGS > 1 THEN
-            -- a row whose key the UPDATE moves: its old key is gone for the rest of the statement (a later WITH
-            -- query's UPDATE of it, which fires no BEFORE statement trigger of its own, and a join meeting it
-            -- again), as the row view has it gone: the old row kept among the moved ones (m) and the setting
-            -- raised, so that the later rows of that key are skipped (S) above. The move is seen by the row's own
-            -- INSERT (its key columns compared there: no statement more per row)
-            v_old := NULL;
-            FOREACH v_k IN ARRAY TG_ARGV[1:TG_NARGS - 1] LOOP
-                v_old := concat_ws(' AND ', v_old, format('($1).%1$I IS NOT DISTINCT FROM ($2).%1$I', v_k));
-            END LOOP;
-            EXECUTE format('INSERT INTO %s VALUES (''U'', $1, $2, nextval(%L)) RETURNING s, NOT (%s)', v_rows, v_seq, v_old)
-               INTO v_n, v_gone USING NEW, OLD;
-            IF v_gone THEN
-                EXECUTE format('INSERT INTO %s (o, s, m) VALUES ($1, $2, true) ON CONFLICT DO NOTHING', v_dels) USING OLD, v_n;
-                IF current_setting(v_flag, true) IS DISTINCT FROM '1' THEN
-                    PERFORM set_config(v_flag, '1', true);  -- (cleared by the flush)
-                END IF;
-            END IF;
-        ELSE
-            EXECUTE format('INSERT INTO %s VALUES (''U'', $1, $2, nextval(%L))', v_rows, v_seq) USING NEW, OLD;
-        END IF;
-        RETURN NEW;
-    END IF;
-    EXECUTE format('INSERT INTO %s VALUES ($1, nextval(%L)) ON CONFLICT DO NOTHING', v_dels, v_seq) USING OLD;
-    GET DIAGNOSTICS v_n = ROW_COUNT;
-    IF v_n = 0 THEN
-        -- its key deleted (or moved away) before by the statement: the row view skips it (a DELETE ... USING
-        -- meeting the row twice, two DELETEs of it), counted 0, kept only as the event 'X' so that the flush
-        -- can tell whether the key was inserted again in between (deleted, inserted, deleted: 27000)
-        EXECUTE format('INSERT INTO %s VALUES (''X'', NULL, $1, nextval(%L))', v_rows, v_seq) USING OLD;
-        RETURN NULL;
-    END IF;
-    RETURN OLD;
+    RAISE EXCEPTION 'tgsis.chunk_face_queue is the statement trigger of a face; its rows are kept by the face''s row function'
+        USING ERRCODE = 'TG100', HINT = 'make the face with tgsis.create_chunk_face';
 END
 $$;
 
 REVOKE ALL ON FUNCTION tgsis.chunk_face_queue() FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.chunk_face_queue() IS
-    'row-level INSTEAD OF trigger of the face of a chunk table (tgsis.create_chunk_face; TG_ARGV[0] the row table): keeps each row written, typed (the face''s row type, never text), in the transaction''s pg_temp.tgsis_face_rows_<view oid> (a DELETE''s in tgsis_face_dels_<view oid>, once) for tgsis.chunk_face_write, which checks and writes them when the statement ends; BEFORE each statement it makes those tables (ON COMMIT DROP) or refuses (42501) one the session made';
+    'BEFORE statement trigger of the face of a chunk table (tgsis.create_chunk_face; TG_ARGV[0] the row table): makes the transaction''s work tables (tgsis.chunk_face_work, ON COMMIT DROP) in which the face''s generated row function (<table>_face_row) keeps each row written, typed (the face''s row type, never text), for tgsis.chunk_face_write, which checks and writes them when the statement ends, or refuses (42501) one the session made; marks the keys a statement deleted or moved away for its later sub-statements';

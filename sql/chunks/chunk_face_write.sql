@@ -1,6 +1,6 @@
 -- tgsis.chunk_face_write(): the AFTER statement trigger of a chunk table's face (tgsis.create_chunk_face), TG_ARGV[0] the row table.
 -- Writes on the face (INSERT, UPDATE, DELETE) are kept row by row by the face's
--- INSTEAD OF row trigger (tgsis.chunk_face_queue) and written here when the
+-- INSTEAD OF row trigger (its generated <table>_face_row) and written here when the
 -- statement ends, all at once: one rewrite per touched chunk per statement,
 -- into tgsis.<table>_chunk through the one writer of chunk contents,
 -- tgsis.write_chunk_rows, keeping the guarantees of today's versioned views'
@@ -39,11 +39,11 @@
 --     key is a delete of the old key and an insert of the new (23505 when it
 --     is there, also when the statement moves another row away from it: a
 --     plain table's key is checked row by row as well); RETURNING returns the
---     row given (chunk_face_queue's NEW or OLD);
---   * the statement's rows, moved from pg_temp.tgsis_face_rows_<view oid> and
---     tgsis_face_dels_<view oid> (kept typed, the face's row type, by
---     tgsis.chunk_face_queue) into the face's
---     queue pg_temp.tgsis_face_queue_<view oid> (the transaction's, ON COMMIT
+--     row given (the row function's NEW or OLD);
+--   * the statement's rows, moved from the work tables of rows and deleted rows
+--     (tgsis.chunk_face_work; kept typed, the face's row type, by the face's
+--     generated row function) into the face's
+--     queue (tgsis.chunk_face_work(table, 'queue'): the transaction's, ON COMMIT
 --     DROP as the row trigger's tables, owned by the storage's owner), are
 --     checked and written all at once:
 --     the chunks they touch locked in key order, compared set-based, written
@@ -51,7 +51,7 @@
 --     not two inserts: 21000); a statement changing features of versioned
 --     classes and of classes without versioning (which no row leaves: each
 --     keeps its key) is written in two groups, the latter in revision 0
---     (through pg_temp.tgsis_face_now_<view oid>), as today's view writes row
+--     (through the work table 'now'), as today's view writes row
 --     by row (one group's revision for both was TG300).
 -- (A write whose snapshot predates the chunk table's last rewrite, which such
 -- a snapshot sees empty, is refused before, by the face's statement trigger
@@ -78,10 +78,10 @@ DECLARE
     v_tname     text;
     v_face      text := format('%I.%I', TG_TABLE_SCHEMA, TG_TABLE_NAME);
     v_chunk     text;
-    v_now       text := format('pg_temp.%I', 'tgsis_face_now_' || TG_RELID);
-    v_queue     text := format('pg_temp.%I', 'tgsis_face_queue_' || TG_RELID);
-    v_rows      text := format('pg_temp.%I', 'tgsis_face_rows_' || TG_RELID);  -- the statement's rows (tgsis.chunk_face_queue)
-    v_dels      text := format('pg_temp.%I', 'tgsis_face_dels_' || TG_RELID);  -- its DELETE's rows read
+    v_now       text := tgsis.chunk_face_work(v_table, 'now');
+    v_queue     text := tgsis.chunk_face_work(v_table, 'queue');
+    v_rows      text := tgsis.chunk_face_work(v_table, 'rows');  -- the statement's rows (the face's row function)
+    v_dels      text := tgsis.chunk_face_work(v_table, 'dels');  -- its DELETE's rows read
     v_kc        text;      -- the object key column (geoid)
     v_cc        text;      -- the chunk column (the local id)
     v_keycols   text[];    -- the row key: the key columns, then the chunk column
@@ -134,7 +134,7 @@ BEGIN
      WHERE a.attrelid = v_chunk::regclass AND a.attnum > 0
        AND a.attnum < (SELECT r.attnum FROM pg_attribute r WHERE r.attrelid = v_chunk::regclass AND r.attname = 'revision');
     IF TG_LEVEL = 'ROW' THEN
-        RAISE EXCEPTION 'tgsis.chunk_face_write is the statement trigger of a face; its rows are kept by tgsis.chunk_face_queue'
+        RAISE EXCEPTION 'tgsis.chunk_face_write is the statement trigger of a face; its rows are kept by the face''s row function'
             USING ERRCODE = 'TG100', HINT = 'make the face with tgsis.create_chunk_face';
     END IF;
     -- the pieces of the statements below, for a row %1$s of the face's type (the queue's q): its chunk's version c,
@@ -157,7 +157,7 @@ BEGIN
     END LOOP;
 
 
-    -- the statement's rows kept by tgsis.chunk_face_queue (its table checked before the statement), as the
+    -- the statement's rows kept by the face's row function (its table checked before the statement), as the
     -- face's rows: an INSERT's row, a DELETE's (the row read), an UPDATE keeping the key (the new row and the
     -- row read); an UPDATE changing the key is a delete of the row read and an insert of the new row
     IF to_regclass(v_rows) IS NULL OR to_regclass(v_dels) IS NULL THEN
@@ -263,7 +263,7 @@ BEGIN
                                   array_to_string(v_keycols, ', '), v_errkey, quote_literal(tgsis.get_working_version())),
                   CONSTRAINT = v_tname || '_pkey', TABLE = v_tname, SCHEMA = v_sch;
     END IF;
-    PERFORM set_config('tgsis.face_deleted_' || TG_RELID, '', true);
+    PERFORM set_config(tgsis.chunk_face_work(v_table, 'deleted'), '', true);
     -- the kept rows, typed (the face's row type: bit for bit), moved into the queue (the skipped ones, S and X,
     -- and the old rows of moved keys, which the UPDATE's own row writes, only served the order above)
     EXECUTE format('WITH r AS (DELETE FROM %1$s r RETURNING r.op, r.n, r.o, r.s), '
@@ -487,4 +487,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.chunk_face_write() FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.chunk_face_write() IS
-    'AFTER statement trigger of the face of a chunk table (tgsis.create_chunk_face; TG_ARGV[0] the row table): the rows tgsis.chunk_face_queue kept for the statement (INSERT, UPDATE, DELETE), checked and written at once: rights, revision, object locks and notes as today''s versioned views'' triggers, the chunks'' locks in key order, each slot compared with the row read (40001, 27000), 23505 for a visible or twice-inserted key, one rewrite per touched chunk through tgsis.write_chunk_rows';
+    'AFTER statement trigger of the face of a chunk table (tgsis.create_chunk_face; TG_ARGV[0] the row table): the rows the face''s row function (<table>_face_row) kept for the statement (INSERT, UPDATE, DELETE), checked and written at once: rights, revision, object locks and notes as today''s versioned views'' triggers, the chunks'' locks in key order, each slot compared with the row read (40001, 27000), 23505 for a visible or twice-inserted key, one rewrite per touched chunk through tgsis.write_chunk_rows';

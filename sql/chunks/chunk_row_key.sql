@@ -1,8 +1,7 @@
 -- tgsis.chunk_row_key(table): the columns of a row's key in the face of a chunk table: the chunk table's
 -- key columns before revision, the chunk column (the local id) in place of chunk (e.g. {geoid, vrtxid}).
--- The face's row trigger (tgsis.chunk_face_queue) gets them as its trigger arguments from
--- tgsis.create_chunk_face, which asks here once, so that a row costs no catalog query; a face made before
--- they were passed asks here per row.
+-- tgsis.create_chunk_face writes them into the face's generated row function (<table>_face_row), so that
+-- a row costs no catalog query; tgsis.chunk_face_queue asks here once per statement.
 CREATE FUNCTION tgsis.chunk_row_key(p_table text)
 RETURNS text[]
 LANGUAGE sql
@@ -21,4 +20,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.chunk_row_key(text) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.chunk_row_key(text) IS
-    'the key columns of a row of the face of a chunk table (the chunk table''s key columns before revision, the chunk column in place of chunk): the row trigger''s arguments (tgsis.create_chunk_face)';
+    'the key columns of a row of the face of a chunk table (the chunk table''s key columns before revision, the chunk column in place of chunk): written into the face''s generated row function by tgsis.create_chunk_face';

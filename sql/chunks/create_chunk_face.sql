@@ -13,7 +13,11 @@
 -- security barrier (tgsis.create_versioned_view does the same). Grants: those
 -- of today's relation tgsis.<table> when it exists (the view or table the
 -- face will replace), else the storage's. Writes: an INSTEAD OF row trigger
--- keeping each row (tgsis.chunk_face_queue) and, after each INSERT, UPDATE or
+-- keeping each row, the face's own function generated here with static SQL
+-- (<schema>.<table>_face_row: a name from the table's, stable across pg_dump/restore;
+-- the storage's owner's, SECURITY DEFINER, search_path pinned, revoked from PUBLIC;
+-- replaced when the face is made again, dropped with the face by the way back
+-- into rows) and, after each INSERT, UPDATE or
 -- DELETE statement, the flush of the kept rows (tgsis.chunk_face_write: one
 -- rewrite per touched chunk), before each statement tgsis.chunk_face_queue's
 -- check of the session's table of kept rows and
@@ -45,6 +49,12 @@ DECLARE
     v_c         record;
     v_acl       record;
     v_face      regclass;
+    v_keycols   text[];
+    v_rowfn     text;      -- the face's row function, <schema>.<table>_face_row (a stable name: pg_dump/restore)
+    v_rows      text;      -- the session's work tables it writes (tgsis.chunk_face_work) and the setting it reads
+    v_dels      text;
+    v_flag      text;
+    v_seq       text;
 BEGIN
     v_chunk := tgsis.chunk_table_of(p_table);  -- TG200 / TG100
     SELECT * INTO v_reg FROM tgsis.chunk_registry(p_table) r;
@@ -82,7 +92,7 @@ BEGIN
                    -- the switch has the face of one switched while versioned (tests/test_storage_default.py)
                    format('%s, stored in chunks (%s, docs/storage.md "The relational face"): the rows of the visible chunk versions '
                           '(those of the session''s version when versioned), '
-                          'written through INSTEAD OF triggers (tgsis.chunk_face_queue, then tgsis.chunk_face_write per statement)%s',
+                          'written through INSTEAD OF triggers (the generated row function <table>_face_row, then tgsis.chunk_face_write per statement)%s',
                           coalesce(obj_description(v_storage, 'pg_class'), tgsis.chunk_relation(p_table, '')), v_chunk,
                           CASE WHEN v_reg.classname IS NULL THEN '; one vertex by key is read fastest by the keyed reads of model 1 (vertex, vertices)'
                                ELSE '' END));
@@ -102,13 +112,67 @@ BEGIN
                        CASE WHEN v_acl.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_acl.grantee)) END,
                        CASE WHEN v_acl.is_grantable THEN ' WITH GRANT OPTION' ELSE '' END);
     END LOOP;
-    -- each row kept (tgsis.chunk_face_queue, its session table checked before the statement), all of them
-    -- checked and written when the statement ends (tgsis.chunk_face_write): one rewrite per touched chunk
-    -- (its arguments: the row table, then the row key's columns, which it needs per row: no catalog query per row)
+    -- each row kept by the face's own row function (static SQL, its plans kept by the session: no statement
+    -- planned per row), its session tables made and checked before the statement (tgsis.chunk_face_queue), all of
+    -- them checked and written when the statement ends (tgsis.chunk_face_write): one rewrite per touched chunk
+    v_keycols := tgsis.chunk_row_key(p_table);
+    v_rowfn := format('%I.%I', v_reg.schemaname, v_reg.tablename || '_face_row');
+    v_rows := tgsis.chunk_face_work(p_table, 'rows');
+    v_dels := tgsis.chunk_face_work(p_table, 'dels');
+    v_flag := quote_literal(tgsis.chunk_face_work(p_table, 'deleted'));
+    v_seq := quote_literal('pg_temp.tgsis_face_seq');
+    EXECUTE format($body$
+CREATE OR REPLACE FUNCTION %1$s()
+RETURNS trigger
+LANGUAGE plpgsql
+VOLATILE
+SECURITY DEFINER
+SET search_path = pg_catalog, pg_temp
+AS $f$
+DECLARE
+    v_s    bigint;
+BEGIN
+    IF TG_OP = 'INSERT' THEN
+        INSERT INTO %2$s VALUES ('I', NEW, NULL, nextval(%4$s));
+        RETURN NEW;
+    END IF;
+    IF TG_OP = 'UPDATE' THEN
+        -- a row of a key the statement deleted, or moved away, before: skipped, kept as the event 'S'
+        IF current_setting(%5$s, true) = '1' AND EXISTS (SELECT FROM %3$s d WHERE %6$s) THEN
+            INSERT INTO %2$s VALUES ('S', NULL, OLD, nextval(%4$s));
+            RETURN NULL;
+        END IF;
+        INSERT INTO %2$s VALUES ('U', NEW, OLD, nextval(%4$s)) RETURNING s INTO v_s;
+        IF NOT (%7$s) THEN
+            -- its key moved: the old key gone for the rest of the statement
+            INSERT INTO %3$s (o, s, m) VALUES (OLD, v_s, true) ON CONFLICT DO NOTHING;
+            IF current_setting(%5$s, true) IS DISTINCT FROM '1' THEN
+                PERFORM set_config(%5$s, '1', true);  -- (cleared by the flush)
+            END IF;
+        END IF;
+        RETURN NEW;
+    END IF;
+    -- a row met twice, or of a key deleted or moved away before: skipped, kept as the event 'X'
+    INSERT INTO %3$s VALUES (OLD, nextval(%4$s)) ON CONFLICT DO NOTHING;
+    IF NOT FOUND THEN
+        INSERT INTO %2$s VALUES ('X', NULL, OLD, nextval(%4$s));
+        RETURN NULL;
+    END IF;
+    RETURN OLD;
+END
+$f$
+$body$, v_rowfn, v_rows, v_dels, v_seq, v_flag,
+                   array_to_string(ARRAY(SELECT format('(d.o).%1$I = OLD.%1$I', k) FROM unnest(v_keycols) AS k), ' AND '),
+                   array_to_string(ARRAY(SELECT format('NEW.%1$I IS NOT DISTINCT FROM OLD.%1$I', k) FROM unnest(v_keycols) AS k),
+                                   ' AND '));
+    EXECUTE format('REVOKE ALL ON FUNCTION %s() FROM PUBLIC', v_rowfn);
+    EXECUTE format('COMMENT ON FUNCTION %s() IS %L', v_rowfn,
+                   format('row-level INSTEAD OF trigger of the face of %s (generated by tgsis.create_chunk_face, static SQL): '
+                          'keeps each row written, typed, in the transaction''s %s (a DELETE''s in %s, once) for '
+                          'tgsis.chunk_face_write, which checks and writes them when the statement ends; '
+                          'the tables made before each statement by tgsis.chunk_face_queue', v_chunk, v_rows, v_dels));
     EXECUTE format('CREATE TRIGGER tgsis_chunk_face INSTEAD OF INSERT OR UPDATE OR DELETE ON %s '
-                   'FOR EACH ROW EXECUTE FUNCTION tgsis.chunk_face_queue(%s)', v_face,
-                   (SELECT string_agg(quote_literal(a), ', ' ORDER BY o)
-                      FROM unnest(p_table || tgsis.chunk_row_key(p_table)) WITH ORDINALITY AS u(a, o)));
+                   'FOR EACH ROW EXECUTE FUNCTION %s()', v_face, v_rowfn);
     EXECUTE format('CREATE TRIGGER tgsis_chunk_face_queue BEFORE INSERT OR UPDATE OR DELETE ON %s '
                    'FOR EACH STATEMENT EXECUTE FUNCTION tgsis.chunk_face_queue(%L)', v_face, p_table);
     EXECUTE format('CREATE TRIGGER tgsis_chunk_face_flush AFTER INSERT OR UPDATE OR DELETE ON %s '
@@ -122,6 +186,8 @@ BEGIN
     END IF;
     EXECUTE format('ALTER VIEW %s OWNER TO %I', v_face,
                    (SELECT pg_get_userbyid(c.relowner) FROM pg_class c WHERE c.oid = v_chunk));
+    EXECUTE format('ALTER FUNCTION %s() OWNER TO %I', v_rowfn,
+                   (SELECT pg_get_userbyid(c.relowner) FROM pg_class c WHERE c.oid = v_chunk));
     RETURN v_face;
 END
 $$;
@@ -129,4 +195,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.create_chunk_face(text, text) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.create_chunk_face(text, text) IS
-    'create the view tgsis.<p_view or p_table> over the visible chunk versions of tgsis.<table>_chunk with exactly the row table''s columns (today''s visibility when versioned, the class rights filter, security_barrier, the grants of today''s relation), written through INSTEAD OF triggers (each row kept by tgsis.chunk_face_queue, written per statement by tgsis.chunk_face_write); TG200 without a chunk table, TG201 when the view exists';
+    'create the view tgsis.<p_view or p_table> over the visible chunk versions of tgsis.<table>_chunk with exactly the row table''s columns (today''s visibility when versioned, the class rights filter, security_barrier, the grants of today''s relation), written through INSTEAD OF triggers (each row kept by the face''s generated row function <table>_face_row, static SQL, in tables tgsis.chunk_face_queue makes before the statement, written per statement by tgsis.chunk_face_write); TG200 without a chunk table, TG201 when the view exists';

@@ -92,9 +92,10 @@ BEGIN
     -- this transaction's tables of rows written through the face (tgsis.chunk_face_write) are of its row type; another
     -- session's exist only while its writing transaction is open (ON COMMIT DROP), and would block the DROP below by
     -- name (2BP01: nothing changed); a session idle after it wrote holds none
-    EXECUTE format('DROP TABLE IF EXISTS pg_temp.%I, pg_temp.%I, pg_temp.%I, pg_temp.%I', 'tgsis_face_now_' || v_face::oid,
-                   'tgsis_face_queue_' || v_face::oid, 'tgsis_face_rows_' || v_face::oid, 'tgsis_face_dels_' || v_face::oid);
+    EXECUTE format('DROP TABLE IF EXISTS %s, %s, %s, %s', tgsis.chunk_face_work(p_table, 'now'),
+                   tgsis.chunk_face_work(p_table, 'queue'), tgsis.chunk_face_work(p_table, 'rows'), tgsis.chunk_face_work(p_table, 'dels'));
     EXECUTE format('DROP VIEW %s', v_face);
+    EXECUTE format('DROP FUNCTION IF EXISTS %I.%I()', 'tgsis', p_table || '_face_row');  -- its row function (tgsis.create_chunk_face)
     EXECUTE format('DROP VIEW %s', tgsis.chunk_relation(p_table, '_chunk_rows'));
     EXECUTE format('DROP TABLE %s', v_chunk);
     EXECUTE format('ANALYZE %s', tgsis.storage_table('tgsis', p_table));

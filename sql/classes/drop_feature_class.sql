@@ -56,6 +56,7 @@ BEGIN
             -- stored in chunks (tgsis.store_class_in_chunks), versioned or not: the face, the decoded view, the
             -- chunks, the row definition, and a versioned table's registration
             EXECUTE format('DROP VIEW %I.%I', v_class.schemaname, v_table);
+            EXECUTE format('DROP FUNCTION IF EXISTS %I.%I()', v_class.schemaname, v_table || '_face_row');
             EXECUTE format('DROP VIEW %I.%I', v_class.schemaname, v_table || '_chunk_rows');
             EXECUTE format('DROP TABLE %I.%I', v_class.schemaname, v_table || '_chunk');
             EXECUTE format('DROP TABLE %I.%I', v_class.schemaname, v_table || '_shape');

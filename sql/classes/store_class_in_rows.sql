@@ -82,9 +82,10 @@ BEGIN
     -- this transaction's tables of rows written through the face (tgsis.chunk_face_write) are of its row type; another
     -- session's exist only while its writing transaction is open (ON COMMIT DROP), and would block the DROP below by
     -- name (2BP01: nothing changed); a session idle after it wrote holds none
-    EXECUTE format('DROP TABLE IF EXISTS pg_temp.%I, pg_temp.%I, pg_temp.%I, pg_temp.%I', 'tgsis_face_now_' || v_face::oid,
-                   'tgsis_face_queue_' || v_face::oid, 'tgsis_face_rows_' || v_face::oid, 'tgsis_face_dels_' || v_face::oid);
+    EXECUTE format('DROP TABLE IF EXISTS %s, %s, %s, %s', tgsis.chunk_face_work(v_name, 'now'),
+                   tgsis.chunk_face_work(v_name, 'queue'), tgsis.chunk_face_work(v_name, 'rows'), tgsis.chunk_face_work(v_name, 'dels'));
     EXECUTE format('DROP VIEW %s', v_face);
+    EXECUTE format('DROP FUNCTION IF EXISTS %I.%I()', v_class.schemaname, v_class.cellprotable || '_face_row');  -- (tgsis.create_chunk_face)
     EXECUTE format('DROP VIEW %s', tgsis.chunk_relation(v_name, '_chunk_rows'));
     EXECUTE format('DROP TABLE %s', tgsis.chunk_relation(v_name, '_chunk'));
     EXECUTE format('DROP TABLE %s', v_shape);
