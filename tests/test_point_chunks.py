@@ -186,6 +186,15 @@ def test_face_writes_answer_as_the_row_tables(conn: Conn) -> None:
         state, message = sqlstate(conn, statement, {"g": g5})
         assert state == "TG100" and "not all of one length" in message, (statement, message)
         conn.rollback()
+    # model 1's object writers carry no point arrays: refused by name, not written otherwise
+    for call in (
+        "SELECT tgsis.write_object_rows('md_vertex', %s, '{}', '{1}', '{{0}}', '{{0}}')",
+        "SELECT tgsis.object_chunks_stage('md_vertex')",
+        "SELECT tgsis.swap_object_chunks('md_vertex', %s, '{0}', '{NULL}')",
+    ):
+        state, message = sqlstate(conn, call, (g5,) if "%s" in call else ())
+        assert state == "TG100" and "does not write: coordinate" in message, (call, message)
+        conn.rollback()
     assert _rows(conn) == unchanged
     conn.rollback()
     _switch(conn, "rows")
