@@ -123,7 +123,7 @@ def test_model1_tables_are_registered_for_chunks(conn: Conn) -> None:
         ("vrtx", "vrtxid", [], 1024),
     ]
     # model 2's time tables are stored in chunks by default in a new database (as model 1's); model 3's triangles and
-    # node positions and the G-maps' darts and involutions (models 4 and 5) are registered for chunks, not stored in
+    # node positions and the G-maps' darts, involutions and points (models 4 and 5) are registered for chunks, not stored in
     # them by default; the columns say what they are
     assert conn.execute(
         "SELECT array_agg(tablename || ':' || chunkcolumn || ':' || chunkdefault ORDER BY tablename) FROM tgsis.model_tables"
@@ -134,8 +134,10 @@ def test_model1_tables_are_registered_for_chunks(conn: Conn) -> None:
             "d4dvrtx:nodeid:false",
             "gmap_alpha:dartid:false",
             "gmap_dart:dartid:false",
+            "gmap_vertex:nodeid:false",
             "md_alpha:dartid:false",
             "md_dart:dartid:false",
+            "md_vertex:vrtxid:false",
             "times_trgl:trglid:true",
             "times_vrtx:vrtxid:true",
         ],

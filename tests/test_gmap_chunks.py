@@ -6,8 +6,8 @@ dart's point and the involution's image are vertex-id columns (relative to
 the chunk's smallest), a dart's acellid and positive arrays of their own type
 that may hold NULL. ``tgsis.store_in_chunks`` / ``tgsis.store_in_rows`` switch
 them with their data and back, and every function of models 4 and 5 keeps its
-answers through the faces. The points (gmap_vertex, md_vertex: a float8[] per
-row) stay rows. The rest of the G-map files run with these tables in chunks
+answers through the faces. The points (gmap_vertex, md_vertex: a 2-D float8
+array per chunk) have their own file, tests/test_point_chunks.py. The rest of the G-map files run with these tables in chunks
 under ``TGSIS_TEST_TIME_STORAGE=chunks`` (docs/testing.md).
 """
 
@@ -301,8 +301,8 @@ def test_hostile_rows_and_tables_are_refused_by_name(conn: Conn) -> None:
         state, message = sqlstate(conn, call, (g4,) if "%s" in call else ())
         assert state == "TG100" and "does not write: acellid, positive" in message, (call, message)
         conn.rollback()
-    # the points have no chunk form: not registered, refused by name
-    assert sqlstate(conn, "SELECT tgsis.store_in_chunks('md_vertex')")[0] == "TG200"
+    # a table not registered for chunks: refused by name (the points are, since plan M: tests/test_point_chunks.py)
+    assert sqlstate(conn, "SELECT tgsis.store_in_chunks('md_cell')")[0] == "TG200"
     conn.rollback()
 
 

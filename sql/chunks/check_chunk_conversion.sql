@@ -11,7 +11,7 @@
 -- shows as a difference). Row for row with
 -- duplicates (EXCEPT ALL both ways: a set seeing two chunk versions of one
 -- chunk shows a key twice), value for value: doubles by their bits
--- (float8send: -0.0, NaN payloads), a vector property by its array_send
+-- (float8send: -0.0, NaN payloads), a vector property or a point by its array_send
 -- (its elements' bits, its shape), ids and keys as they are. Raises TG000
 -- naming the table, the object (geoid and the other key columns), the chunk
 -- and the set of the first difference, with the count of differing rows.
@@ -48,7 +48,7 @@ BEGIN
     v_shift := round(log(2, v_reg.chunksize))::integer;
     v_keys := tgsis.chunk_key(p_table);
     -- floating-point values by their bits (-0.0, NaN payloads), the rest as they are
-    v_cols := (SELECT string_agg(CASE WHEN c.role = 'vector' THEN format('array_send(r.%1$I) AS %1$I', c.name)  -- (its elements' bits)
+    v_cols := (SELECT string_agg(CASE WHEN c.role IN ('vector', 'point') THEN format('array_send(r.%1$I) AS %1$I', c.name)  -- (its elements' bits)
                                       WHEN c.role = 'float' OR c.typename = 'double precision' THEN format('float8send(r.%1$I) AS %1$I', c.name)
                                       WHEN c.typename = 'real' THEN format('float4send(r.%1$I) AS %1$I', c.name)
                                       ELSE format('r.%I', c.name) END, ', ' ORDER BY c.colorder)

@@ -26,7 +26,15 @@
 -- class makes it; t one of the value types): a two-dimensional t[] (slots x k) in the chunk table, typename the ELEMENT
 -- type and size k (NULL for every other role); a NULL vector is a row of k
 -- NULLs there, which no vector of the row table is (its CHECK refuses a NULL
--- element). A column of any other type is refused by name (TG100).
+-- element). 'point' (a model table's double precision[] column: a G-map's
+-- vertex, m coordinates, m per object: tgsis.gmap.embedding,
+-- tgsis.md_gmap.embedding): a two-dimensional double precision[] (slots x m)
+-- per chunk, m the chunk's own (array_length(arr, 2): a chunk holds one
+-- object's points), typename double precision and size NULL; a hole is a row
+-- of m NULLs, which no point is (the row table refuses a NULL coordinate),
+-- and a slot is present where its first coordinate is not NULL
+-- (docs/storage.md, "The points in chunks"). A column of any other type is
+-- refused by name (TG100).
 CREATE FUNCTION tgsis.chunk_columns(p_table text)
 RETURNS TABLE (name text, role text, keyorder integer, colorder integer, typename text, size integer)
 LANGUAGE plpgsql
@@ -123,11 +131,14 @@ BEGIN
                 WHEN a.atttypid = 'double precision'::regtype AND NOT a.attname = ANY (v_reg.chunkrefs) THEN 'float'
                 -- a model table's other scalar column (a G-map dart's acellid, positive: NULL allowed)
                 WHEN a.atttypid = ANY (v_types) AND NOT a.attname = ANY (v_reg.chunkrefs) THEN 'value'
+                -- a model table's point (a G-map's vertex: double precision[], m per object): a 2-D array per chunk
+                WHEN a.atttypid = 'double precision[]'::regtype THEN 'point'
            END,
            pk.keyorder,
            row_number() OVER (ORDER BY a.attnum)::integer,
            CASE WHEN v_class AND a.atttypid = ANY (v_arrays) AND v_sizes ? a.attname AND pk.keyorder IS NULL
                 THEN format_type((SELECT t.typelem FROM pg_type t WHERE t.oid = a.atttypid), NULL)
+                WHEN NOT v_class AND a.atttypid = 'double precision[]'::regtype AND pk.keyorder IS NULL THEN 'double precision'
                 ELSE format_type(a.atttypid, a.atttypmod) END,
            CASE WHEN v_class AND a.atttypid = ANY (v_arrays) AND pk.keyorder IS NULL THEN (v_sizes ->> a.attname)::integer END
       FROM pg_attribute a LEFT JOIN pk ON pk.name = a.attname
@@ -145,7 +156,8 @@ BEGIN
        AND NOT (NOT v_class AND a.attname = ANY (v_reg.chunkrefs) AND a.atttypid = 'bigint'::regtype)
        AND NOT (NOT v_class AND a.atttypid = 'double precision'::regtype AND NOT a.attname = ANY (v_reg.chunkrefs))
        AND NOT (a.atttypid = ANY (v_types) AND NOT (NOT v_class AND a.attname = ANY (v_reg.chunkrefs)))
-       AND NOT (v_class AND a.atttypid = ANY (v_arrays) AND v_sizes ? a.attname);
+       AND NOT (v_class AND a.atttypid = ANY (v_arrays) AND v_sizes ? a.attname)
+       AND NOT (NOT v_class AND a.atttypid = 'double precision[]'::regtype);
     IF v_class AND v_bad IS NULL
        AND NOT EXISTS (SELECT FROM pg_attribute a
                         WHERE a.attrelid = v_storage AND a.attnum > 0 AND NOT a.attisdropped
@@ -162,6 +174,7 @@ BEGIN
                         WHERE a.attrelid = v_storage AND a.attnum > 0 AND NOT a.attisdropped
                           AND a.attname NOT IN ('revision', 'lastrevs', 'revclosed', v_reg.chunkcolumn)
                           AND ((a.atttypid = 'double precision'::regtype AND NOT a.attname = ANY (v_reg.chunkrefs))
+                               OR a.atttypid = 'double precision[]'::regtype
                                OR (a.atttypid = 'bigint'::regtype AND a.attname = ANY (v_reg.chunkrefs)))
                           AND NOT EXISTS (SELECT FROM pg_constraint con WHERE con.conrelid = v_storage AND con.contype = 'p'
                                                                           AND a.attnum = ANY (con.conkey))) THEN
@@ -201,4 +214,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.chunk_columns(text) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.chunk_columns(text) IS
-    'the columns of a table of tgsis.chunk_registry (a model table registered for chunks, or a STATIC class''s property table named schema.table), from its live storage, in column order, each with its role in the chunk table: key, chunk (the local id), float (double precision[]), ref (integer[] relative to vbase, and <name>_wide) or value (a property, or a model table''s other scalar column: an array of its type, NULL elements allowed) or vector (a class''s vector property of size k: a 2-D array, slots x k, typename its element type, size k), and its type; TG200 for a table not registered for chunks, TG100 for a column the layout has no form for';
+    'the columns of a table of tgsis.chunk_registry (a model table registered for chunks, or a STATIC class''s property table named schema.table), from its live storage, in column order, each with its role in the chunk table: key, chunk (the local id), float (double precision[]), ref (integer[] relative to vbase, and <name>_wide) or value (a property, or a model table''s other scalar column: an array of its type, NULL elements allowed) or vector (a class''s vector property of size k: a 2-D array, slots x k, typename its element type, size k) or point (a model table''s double precision[]: a 2-D array, slots x m, m per chunk, size NULL), and its type; TG200 for a table not registered for chunks, TG100 for a column the layout has no form for';

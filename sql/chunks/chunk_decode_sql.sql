@@ -22,8 +22,20 @@
 -- them, NULL where its first component is (a NULL vector or a hole: the row
 -- table refuses a NULL element, and tgsis.chunk_encoding_checks a row partly
 -- NULL). Each slice detoasts the array once per chunk: k reads of it.
+-- A point (role 'point': a 2-D double precision[], slots x m, m per chunk)
+-- needs a fifth piece, joins: a LATERAL subquery per chunk flattening the
+-- array once (ARRAY(SELECT coalesce(x, 0) FROM unnest(arr) AS x), OFFSET 0:
+-- a hole's NULLs made 0, never read, so that no slice carries a NULL bitmap
+-- a row's array has not: array_send equal to the row table's) with m =
+-- array_length(arr, 2), which every reader places between the chunk table
+-- and the unnest ('' for tables without points); the unnest takes the
+-- first coordinates arr[:][1:1] (NULL at a hole: the row table refuses a
+-- NULL coordinate) and the slot's point is the slice
+-- flat[(o - 1) * m + 1 : o * m], a one-dimensional array from 1 as the row
+-- table holds it (docs/storage.md, "The points in chunks": a per-row slice of
+-- the 2-D array costs 50x, the flatten per chunk 4.35x the row table's scan).
 CREATE FUNCTION tgsis.chunk_decode_sql(p_table text, p_alias text)
-RETURNS TABLE (select_list text, arrays text, aliases text, present text)
+RETURNS TABLE (select_list text, arrays text, aliases text, present text, joins text)
 LANGUAGE plpgsql
 STABLE
 SET search_path = pg_catalog, pg_temp
@@ -35,6 +47,7 @@ DECLARE
     v_select text[] := '{}';
     v_arrays text[] := '{}';
     v_alias  text[] := '{}';
+    v_lat    text := '';
     v_a      text := quote_ident(p_alias);
     v_c      record;
 BEGIN
@@ -55,6 +68,17 @@ BEGIN
                                            (SELECT string_agg(format('u.%I', v_c.name || '#' || i), ', ' ORDER BY i)
                                               FROM generate_series(1, v_c.size) AS i));
             v_first := coalesce(v_first, format('NOT coalesce(u.o = ANY (%s.holes), false)', v_a));
+        ELSIF v_c.role = 'point' THEN
+            -- flattened once per chunk (the LATERAL piece, OFFSET 0: not pulled up into a per-row expression), sliced
+            -- per slot; the first coordinate's slice drives the ordinality and marks a hole (NULL)
+            v_lat := v_lat || format(' CROSS JOIN LATERAL (SELECT ARRAY(SELECT coalesce(x, 0) FROM unnest(%1$s.%2$I) AS x) AS flat, '
+                                     'array_length(%1$s.%2$I, 2) AS m OFFSET 0) AS %3$I',
+                                     v_a, v_c.name, 'p#' || p_alias || '#' || v_c.name);
+            v_arrays := v_arrays || format('%s.%I[:][1:1]', v_a, v_c.name);
+            v_alias := v_alias || quote_ident(v_c.name || '#1');
+            v_select := v_select || format('CASE WHEN u.%1$I IS NOT NULL THEN %2$I.flat[(u.o - 1) * %2$I.m + 1 : u.o * %2$I.m] END AS %3$I',
+                                           v_c.name || '#1', 'p#' || p_alias || '#' || v_c.name, v_c.name);
+            v_first := coalesce(v_first, format('u.%I IS NOT NULL', v_c.name || '#1'));
         ELSIF v_c.role IN ('float', 'value') THEN
             v_arrays := v_arrays || format('%s.%I', v_a, v_c.name);
             v_alias := v_alias || quote_ident(v_c.name);
@@ -77,11 +101,12 @@ BEGIN
             v_first := coalesce(v_first, format('(u.%I IS NOT NULL OR u.%I IS NOT NULL)', v_c.name, v_c.name || '_wide'));
         END IF;
     END LOOP;
-    RETURN QUERY SELECT array_to_string(v_select, ', '), array_to_string(v_arrays, ', '), array_to_string(v_alias, ', '), v_first;
+    RETURN QUERY SELECT array_to_string(v_select, ', '), array_to_string(v_arrays, ', '), array_to_string(v_alias, ', '), v_first,
+                        v_lat;
 END
 $$;
 
 REVOKE ALL ON FUNCTION tgsis.chunk_decode_sql(text, text) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.chunk_decode_sql(text, text) IS
-    'the SQL pieces decoding tgsis.<table>_chunk (alias p_alias) into the row table''s columns: the select list (ids from chunk and ordinality u.o, vertex ids from vbase or _wide), the arrays to unnest, their aliases, and the test of a present slot; read by tgsis.create_chunk_view and create_chunk_face';
+    'the SQL pieces decoding tgsis.<table>_chunk (alias p_alias) into the row table''s columns: the select list (ids from chunk and ordinality u.o, vertex ids from vbase or _wide), the arrays to unnest, their aliases, the test of a present slot, and a LATERAL join to place between the chunk table and the unnest (a point''s array flattened once per chunk; empty without points); read by tgsis.create_chunk_view and create_chunk_face';

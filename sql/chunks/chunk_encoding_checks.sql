@@ -21,7 +21,10 @@
 -- property (role 'vector', size k): a two-dimensional array from [1][1], the
 -- chunk's length x k, each row all NULL (a NULL vector, or a hole: every hole
 -- is) or without NULL (the row table refuses a NULL element): a row partly
--- NULL would read as a NULL vector. Internal: runs with the caller's rights.
+-- NULL would read as a NULL vector. A point (role 'point'): a two-dimensional
+-- double precision array from [1][1], the chunk's length x m, each row all
+-- NULL exactly at the holes and without NULL at the present slots. Internal:
+-- runs with the caller's rights.
 CREATE FUNCTION tgsis.chunk_encoding_checks(p_table text)
 RETURNS text[]
 LANGUAGE plpgsql
@@ -34,9 +37,9 @@ DECLARE
 BEGIN
     v_size := (SELECT r.chunksize FROM tgsis.chunk_registry(p_table) r);
     v_len := (SELECT CASE WHEN c.role IN ('float', 'value') THEN format('cardinality(c.%I)', c.name)
-                          WHEN c.role = 'vector' THEN format('array_length(c.%I, 1)', c.name)
+                          WHEN c.role IN ('vector', 'point') THEN format('array_length(c.%I, 1)', c.name)
                           ELSE format('cardinality(coalesce(c.%I, c.%I))', c.name, c.name || '_wide') END
-                FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref', 'value', 'vector') ORDER BY c.colorder LIMIT 1);
+                FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref', 'value', 'vector', 'point') ORDER BY c.colorder LIMIT 1);
     RETURN ARRAY[format('%s BETWEEN 1 AND %s', v_len, v_size),
                  format('(c.holes IS NULL OR (cardinality(c.holes) > 0 AND NOT (%s = ANY (c.holes))))', v_len)]
         -- (array_positions finds the NULLs in C: the check runs on every upload; the CASE keeps it from
@@ -65,6 +68,17 @@ BEGIN
                                'OR (count(e.x) > 0 AND ((e.n - 1) / %3$s + 1) = ANY (coalesce(c.holes::bigint[], ''{}'')))) '
                                'ELSE false END)', c.name, v_len, c.size)
                    FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'vector' ORDER BY c.colorder)
+        -- a point's 2-D array: present, the chunk's length x m (m >= 1, the chunk's own) from [1][1], each row all
+        -- NULL exactly at the holes and without NULL elsewhere (the row table refuses a NULL coordinate)
+        || ARRAY(SELECT format('(c.%1$I IS NOT NULL AND CASE WHEN array_ndims(c.%1$I) = 2 AND array_lower(c.%1$I, 1) = 1 '
+                               'AND array_lower(c.%1$I, 2) = 1 AND array_length(c.%1$I, 1) = %2$s '
+                               'THEN NOT EXISTS (SELECT FROM unnest(c.%1$I) WITH ORDINALITY AS e(x, n) '
+                               'GROUP BY (e.n - 1) / array_length(c.%1$I, 2) '
+                               'HAVING count(e.x) NOT IN (0, array_length(c.%1$I, 2)) '
+                               'OR (count(e.x) > 0) = (((e.n - 1) / array_length(c.%1$I, 2) + 1) '
+                               '= ANY (coalesce(c.holes::bigint[], ''{}'')))) '
+                               'ELSE false END)', c.name, v_len)
+                   FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'point' ORDER BY c.colorder)
         || ARRAY(SELECT format('(c.vbase IS NOT NULL) = (c.%1$I IS NOT NULL) AND (c.vbase IS NULL) = (c.%2$I IS NOT NULL)',
                                c.name, c.name || '_wide')
                    FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder)

@@ -404,7 +404,7 @@ BEGIN
         -- 27000); an inserted row's key present: 23505
         EXECUTE format('WITH ch AS (SELECT c.*, c.xmin = pg_catalog.xid(pg_catalog.pg_current_xact_id()) AS tgsis_mine '
                        '              FROM %1$s c WHERE %2$s AND EXISTS (SELECT FROM %3$s q WHERE %4$s)), '
-                       '     d AS (SELECT %5$s, c.tgsis_mine FROM ch c CROSS JOIN LATERAL unnest(%6$s) WITH ORDINALITY AS u(%7$s, o) '
+                       '     d AS (SELECT %5$s, c.tgsis_mine FROM ch c%14$s CROSS JOIN LATERAL unnest(%6$s) WITH ORDINALITY AS u(%7$s, o) '
                        '            WHERE %8$s), '
                        '     s AS (SELECT %9$s AS keytext, q.tgsis_old IS NULL AS inserted, '
                        '                  CASE WHEN d.%10$I IS NULL THEN CASE WHEN c.tgsis_mine THEN ''mine'' ELSE ''absent'' END '
@@ -423,7 +423,8 @@ BEGIN
                        (SELECT string_agg(format('d.%I', a.attname), ', ' ORDER BY a.attnum) FROM pg_attribute a
                          WHERE a.attrelid = TG_RELID AND a.attnum > 0 AND NOT a.attisdropped),
                        v_face,
-                       array_to_string(ARRAY(SELECT format('d.%1$I = q.%1$I', k) FROM unnest(v_keycols) AS k), ' AND '))
+                       array_to_string(ARRAY(SELECT format('d.%1$I = q.%1$I', k) FROM unnest(v_keycols) AS k), ' AND '),
+                       v_dec.joins)
            INTO v_gone, v_changed, v_mine, v_dupkey USING v_set;
         IF v_gone IS NOT NULL THEN
             RAISE EXCEPTION 'could not serialize access due to concurrent delete of row (%)=(%) of %.% in version %',

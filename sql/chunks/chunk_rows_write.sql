@@ -7,7 +7,9 @@
 -- (columns x keys)) and those of an INSERT for the rows (p_columns: the
 -- bigint, integer or smallint columns, the double precision ones, then the
 -- boolean ones; p_ints, p_floats, p_bools their values, each
--- (columns x rows); a column that may be NULL may be left out):
+-- (columns x rows); a column that may be NULL may be left out; a point, a
+-- G-map's vertex of m coordinates, is named m times in a row among the
+-- double precision ones, one row of p_floats per coordinate):
 --   TG100 for a table not stored in chunks; 40001 for a snapshot older than
 --   the chunk table (tgsis.chunk_snapshot_guard; with keys to delete, as
 --   delete_chunk_rows did); TG100 for keys or rows of another shape; DELETE
@@ -61,6 +63,7 @@ DECLARE
     v_icols     text[];
     v_fcols     text[];
     v_bcols     text[];
+    v_pcols     text[];   -- the points (role 'point': a G-map's vertex), each given as its m double rows in a row
     v_given     text[];
     v_nd        integer := 0;
     v_ni        integer := 0;
@@ -133,12 +136,15 @@ BEGIN
                           ORDER BY c.colorder);
         v_fcols := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.typename = 'double precision' ORDER BY c.colorder);
         v_bcols := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.typename = 'boolean' ORDER BY c.colorder);
+        v_pcols := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'point' ORDER BY c.colorder);
         v_ni := coalesce(array_length(p_ints, 2), 0);
         v_icols := ARRAY(SELECT c FROM unnest(v_given) WITH ORDINALITY AS u(c, o) WHERE c = ANY (v_icols) ORDER BY o);
         v_fcols := ARRAY(SELECT c FROM unnest(v_given) WITH ORDINALITY AS u(c, o) WHERE c = ANY (v_fcols) ORDER BY o);
         v_bcols := ARRAY(SELECT c FROM unnest(v_given) WITH ORDINALITY AS u(c, o) WHERE c = ANY (v_bcols) ORDER BY o);
         IF p_columns IS NULL OR v_given IS DISTINCT FROM v_icols || v_fcols || v_bcols
-           OR cardinality(v_given) <> (SELECT count(DISTINCT c) FROM unnest(v_given) AS c)
+           -- (a point's name m times in a row, its coordinates' rows; any other once)
+           OR EXISTS (SELECT FROM unnest(v_given) WITH ORDINALITY AS u(c, o) GROUP BY u.c
+                       HAVING count(*) > 1 AND (NOT u.c = ANY (v_pcols) OR max(u.o) - min(u.o) + 1 <> count(*)))
            OR EXISTS (SELECT FROM tgsis.chunk_columns(p_table) c
                        JOIN pg_attribute a ON a.attrelid = tgsis.row_shape(p_table) AND a.attname = c.name
                       WHERE NOT c.name = ANY (v_given) AND (a.attnotnull OR c.role IN ('key', 'chunk', 'float', 'ref')))
@@ -232,8 +238,17 @@ BEGIN
         v_vals := array_to_string(ARRAY(SELECT format('$1[%s:%s][:]', o, o) FROM generate_series(1, cardinality(v_icols)) AS o)
                                   || ARRAY(SELECT format('$2[%s:%s][:]', o, o) FROM generate_series(1, cardinality(v_fcols)) AS o)
                                   || ARRAY(SELECT format('$3[%s:%s][:]', o, o) FROM generate_series(1, cardinality(v_bcols)) AS o), ', ');
-        EXECUTE format('INSERT INTO %s (%s, _delete) SELECT u.*, false FROM unnest(%s) AS u',
-                       v_tab, array_to_string(ARRAY(SELECT quote_ident(c) FROM unnest(p_columns) AS c), ', '), v_vals)
+        -- (a point's m rows unnested as m columns u.c<o>, written as ARRAY[...] of them)
+        EXECUTE format('INSERT INTO %s (%s, _delete) SELECT %s, false FROM unnest(%s) AS u(%s)',
+                       v_tab,
+                       (SELECT string_agg(quote_ident(g.c), ', ' ORDER BY g.first)
+                          FROM (SELECT u.c, min(u.o) AS first FROM unnest(p_columns) WITH ORDINALITY AS u(c, o) GROUP BY u.c) g),
+                       (SELECT string_agg(CASE WHEN g.c = ANY (v_pcols) THEN format('ARRAY[%s]', g.cols) ELSE g.cols END, ', '
+                                          ORDER BY g.first)
+                          FROM (SELECT u.c, min(u.o) AS first, string_agg(format('u.c%s', u.o), ', ' ORDER BY u.o) AS cols
+                                  FROM unnest(p_columns) WITH ORDINALITY AS u(c, o) GROUP BY u.c) g),
+                       v_vals,
+                       (SELECT string_agg(format('c%s', o), ', ' ORDER BY o) FROM generate_series(1, cardinality(p_columns)) AS o))
           USING p_ints, p_floats, p_bools;
         v_ids := v_ids || ARRAY(SELECT DISTINCT i FROM unnest(p_ints[array_position(p_columns, v_reg.chunkcolumn):array_position(p_columns, v_reg.chunkcolumn)][:]) AS i
                                  WHERE i IS NOT NULL);

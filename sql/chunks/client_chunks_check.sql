@@ -4,7 +4,8 @@
 -- keyed by the object alone (not model 2's (geoid, times, chunk)), and only
 -- with the arrays that encoder writes. A model table's columns of role
 -- 'value' (a G-map dart's acellid and positive: model 1's encoder writes no
--- such arrays) would be left NULL, a silent loss: refused, naming the columns
+-- such arrays) would be left NULL, a silent loss, and of role 'point' (a
+-- G-map's vertex: a 2-D array it does not write): refused, naming the columns
 -- and the writer to use. A class's property table ('value's and 'vector's:
 -- a vector property's 2-D array, slots x k) is encoded whole by its own
 -- client path. Both callers ask it, so that neither can be reached with a
@@ -26,7 +27,7 @@ BEGIN
             USING ERRCODE = 'TG100',
                   HINT = format('write its rows through the face tgsis.%I or tgsis.insert_chunk_rows', p_table);
     END IF;
-    SELECT string_agg(c.name, ', ' ORDER BY c.colorder) INTO v_bad FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'value';
+    SELECT string_agg(c.name, ', ' ORDER BY c.colorder) INTO v_bad FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('value', 'point');
     IF v_model AND v_bad IS NOT NULL THEN
         RAISE EXCEPTION 'tgsis.% has columns tgsis.% does not write: %', quote_ident(p_table), p_caller, v_bad
             USING ERRCODE = 'TG100',

@@ -83,9 +83,9 @@ BEGIN
     IF v_geoidcol IS NOT NULL THEN
         v_where := v_where || tgsis.class_rights_filter(v_geoidcol, 'SELECT', 'v');
     END IF;
-    EXECUTE format('CREATE VIEW %I.%I WITH (security_barrier = true) AS SELECT %s FROM %s v '
+    EXECUTE format('CREATE VIEW %I.%I WITH (security_barrier = true) AS SELECT %s FROM %s v%s '
                    'CROSS JOIN LATERAL unnest(%s) WITH ORDINALITY AS u(%s, o) WHERE %s',
-                   v_reg.schemaname, v_view, v_dec.select_list, v_chunk, v_dec.arrays, v_dec.aliases, array_to_string(v_where, ' AND '));
+                   v_reg.schemaname, v_view, v_dec.select_list, v_chunk, v_dec.joins, v_dec.arrays, v_dec.aliases, array_to_string(v_where, ' AND '));
     v_face := format('%I.%I', v_reg.schemaname, v_view)::regclass;
     EXECUTE format('COMMENT ON VIEW %s IS %L', v_face,
                    -- one text whether versioned or not: the WHERE above asks at each read, and a table versioned after

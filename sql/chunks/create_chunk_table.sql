@@ -25,7 +25,9 @@
 -- caller's rights (tgsis's owner, who owns the storage). A class's property
 -- table (tgsis.chunk_registry, 'schema.table') gets its chunk table in its
 -- own schema, with one array per property of the property's own type, a
--- vector property's two-dimensional (slots x k)
+-- vector property's two-dimensional (slots x k); a model table's point
+-- (a G-map's vertex, role 'point') is a two-dimensional double precision[]
+-- (slots x m), lz4 as the coordinates
 -- (docs/storage.md, "Property chunks: the contract").
 CREATE FUNCTION tgsis.create_chunk_table(p_table text)
 RETURNS regclass
@@ -81,7 +83,7 @@ BEGIN
         v_defs := v_defs || ARRAY['vbase bigint', 'vtop bigint'];
     END IF;
     FOR v_c IN SELECT c.name, c.role, c.typename FROM tgsis.chunk_columns(p_table) c WHERE c.keyorder IS NULL ORDER BY c.colorder LOOP
-        v_defs := v_defs || CASE WHEN v_c.role = 'float' THEN format('%I double precision[] COMPRESSION %s', v_c.name, v_float)
+        v_defs := v_defs || CASE WHEN v_c.role IN ('float', 'point') THEN format('%I double precision[] COMPRESSION %s', v_c.name, v_float)
                                  -- a property: an array of its own type (lz4 for doubles, as coordinates)
                                  -- (a vector property: the same array type, two-dimensional, slots x k)
                                  WHEN v_c.role IN ('value', 'vector') THEN format('%I %s[] COMPRESSION %s', v_c.name, v_c.typename,
@@ -118,6 +120,10 @@ BEGIN
             EXECUTE format('COMMENT ON COLUMN %s.%I IS %L', v_chunk, v_c.name,
                            format('%s: slots x %s, a vector per slot (a row of %s NULLs: no value, or a hole when holes lists '
                                   'the slot)', coalesce(v_coldesc, v_c.name), v_c.size, v_c.size));
+        ELSIF v_c.role = 'point' THEN
+            EXECUTE format('COMMENT ON COLUMN %s.%I IS %L', v_chunk, v_c.name,
+                           format('%s: slots x m, a point per slot, bit-exact, m the object''s (a row of m NULLs: a hole)',
+                                  coalesce(v_coldesc, v_c.name)));
         ELSIF v_c.role = 'float' THEN
             EXECUTE format('COMMENT ON COLUMN %s.%I IS %L', v_chunk, v_c.name,
                            format('%s per slot, bit-exact (NULL: a hole)', coalesce(v_coldesc, v_c.name)));

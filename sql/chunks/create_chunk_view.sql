@@ -30,9 +30,9 @@ BEGIN
     END IF;
     SELECT * INTO v_dec FROM tgsis.chunk_decode_sql(p_table, 'c') AS d;
     EXECUTE format('CREATE VIEW %s WITH (security_invoker = true) AS SELECT %s, c.revision, c.lastrevs, c.revclosed '
-                   'FROM %s c CROSS JOIN LATERAL unnest(%s) WITH ORDINALITY AS u(%s, o) '
+                   'FROM %s c%s CROSS JOIN LATERAL unnest(%s) WITH ORDINALITY AS u(%s, o) '
                    'WHERE (SELECT tgsis.chunk_snapshot_guard(%L::regclass)) AND %s',
-                   v_view, v_dec.select_list, v_chunk, v_dec.arrays, v_dec.aliases, v_chunk::text, v_dec.present);
+                   v_view, v_dec.select_list, v_chunk, v_dec.joins, v_dec.arrays, v_dec.aliases, v_chunk::text, v_dec.present);
     EXECUTE format('COMMENT ON VIEW %s IS %L', v_view,
                    format('the chunks of %s decoded: one row per present slot and chunk version, with the columns of %s '
                           'and the chunk version''s revision, lastrevs, revclosed (no visibility filter)', v_chunk,

@@ -27,7 +27,8 @@
 -- The table is one of tgsis.chunk_registry: a model table, or a class's
 -- property table ('schema.table'), whose NULL values stay NULL in their slot
 -- (holes alone marks the absent ids); a vector property's chunk array is
--- two-dimensional (slots x k), a NULL vector's row and a hole's k NULLs.
+-- two-dimensional (slots x k), a NULL vector's row and a hole's k NULLs;
+-- a point's (a G-map's vertex) two-dimensional (slots x m), a hole's row m NULLs.
 CREATE FUNCTION tgsis.rows_to_chunks(p_table text)
 RETURNS bigint
 LANGUAGE plpgsql
@@ -77,7 +78,7 @@ BEGIN
     -- the arrays of values (coordinates, or a class's properties), built alike
     v_floats := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'value') ORDER BY c.colorder);
     v_refs := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder);
-    v_vals := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref', 'value', 'vector')
+    v_vals := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref', 'value', 'vector', 'point')
                      ORDER BY c.colorder);
     v_k := ARRAY(SELECT quote_ident(k) FROM unnest(v_keys) AS k) || 'chunk'::text;
     v_parts := jsonb_build_object(
@@ -133,6 +134,12 @@ BEGIN
             || ARRAY(SELECT format('array_agg(CASE WHEN s.slot = m.slot AND m.%1$I IS NOT NULL THEN m.%1$I '
                                    'ELSE array_fill(NULL::%2$s, ARRAY[%3$s]) END ORDER BY s.slot) AS %1$I', c.name, c.typename, c.size)
                        FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'vector' ORDER BY c.colorder)
+            -- a point: the slots' points as the rows of a 2-D array, a hole's m NULLs (m the length of the row it
+            -- comes before: every point of an object has one length, tgsis.store_in_chunks checked it)
+            || ARRAY(SELECT format('array_agg(CASE WHEN s.slot = m.slot THEN m.%1$I '
+                                   'ELSE array_fill(NULL::double precision, ARRAY[cardinality(m.%1$I)]) END ORDER BY s.slot) AS %1$I',
+                                   c.name)
+                       FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'point' ORDER BY c.colorder)
             || ARRAY(SELECT format('CASE WHEN m.fits THEN array_agg(CASE WHEN m.fits AND s.slot = m.slot THEN (m.%I - %s)::integer END '
                                    'ORDER BY s.slot) END AS %I',
                                    r, CASE WHEN r = v_refs[1] THEN 'm.vmin' ELSE format('m.%I', v_refs[1]) END, r)

@@ -23,7 +23,10 @@
 -- them, nothing changes). Partitioned storage (tgsis.partition_model_storage)
 -- gives a chunk table partitioned the same way (tgsis.partition_chunk_storage).
 -- Refused by name: a table not registered for chunks (TG200), one stored in
--- chunks already (TG201), storage partitioned another way (TG100). Returns the chunk versions
+-- chunks already (TG201), storage partitioned another way (TG100), a table
+-- of points (role 'point': a G-map's vertices) holding an object whose points
+-- are not all of one length, or one without coordinates (TG100 naming the
+-- object and the point, before anything is made). Returns the chunk versions
 -- written. Internal (tgsis's owner: it creates and drops the storage).
 CREATE FUNCTION tgsis.store_in_chunks(p_table text)
 RETURNS bigint
@@ -69,6 +72,39 @@ BEGIN
         END IF;
     END IF;
     SELECT * INTO v_versioned FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table;
+    -- a point (role 'point': a G-map's vertex) is a row of its chunk's 2-D array, m per chunk: an object's points
+    -- of more than one length (which the row table allows and tgsis.check_geometry reports), or of none, have no
+    -- chunk form; refused by name before anything is made or moved (the aggregate would fail 2202E)
+    FOR v_name IN SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'point' ORDER BY c.colorder LOOP
+        EXECUTE format(
+            'SELECT format(%1$L, r.%2$I, concat_ws(%3$L, %4$s), coalesce(cardinality(r.%5$I), 0), b.len, b.lens)
+               FROM %6$s r
+               JOIN (SELECT s.%2$I AS k, mode() WITHIN GROUP (ORDER BY coalesce(cardinality(s.%5$I), 0)) AS len,
+                            array_agg(DISTINCT coalesce(cardinality(s.%5$I), 0) ORDER BY coalesce(cardinality(s.%5$I), 0)) AS lens
+                       FROM %6$s s GROUP BY s.%2$I
+                     HAVING count(DISTINCT coalesce(cardinality(s.%5$I), 0)) > 1 OR min(coalesce(cardinality(s.%5$I), 0)) = 0) b
+                 ON b.k = r.%2$I
+              WHERE coalesce(cardinality(r.%5$I), 0) = 0 OR coalesce(cardinality(r.%5$I), 0) <> b.len
+              ORDER BY %7$s LIMIT 1',
+            'object %s: the point (%s) has %s coordinates, most of its others %s (lengths %s)',
+            (SELECT r.keycolumn FROM tgsis.model_tables r WHERE r.tablename = p_table), ', ',
+            (SELECT string_agg(format('r.%I', k), ', ' ORDER BY o)
+               FROM unnest(tgsis.chunk_key(p_table) || (SELECT r.chunkcolumn FROM tgsis.model_tables r WHERE r.tablename = p_table))
+                    WITH ORDINALITY AS u(k, o)),
+            v_name, v_storage,
+            (SELECT string_agg(format('r.%I', k), ', ' ORDER BY o)
+               FROM unnest(tgsis.chunk_key(p_table) || (SELECT r.chunkcolumn FROM tgsis.model_tables r WHERE r.tablename = p_table))
+                    WITH ORDINALITY AS u(k, o)))
+           INTO v_pkey;
+        IF v_pkey IS NOT NULL THEN
+            RAISE EXCEPTION 'tgsis.% cannot be stored in chunks: the points of an object are not all of one length', quote_ident(p_table)
+                USING ERRCODE = 'TG100',
+                      DETAIL = format('%s, in column %I; a chunk holds one object''s points as the rows of a 2-D array of '
+                                      'its embedding''s length, m coordinates each (tgsis.check_geometry reports such '
+                                      'objects); nothing was changed.', v_pkey, v_name),
+                      HINT = 'give every point of the object its embedding''s m coordinates, then store the table in chunks';
+        END IF;
+    END LOOP;
 
     -- the conflicts' marks fingerprint the stored versions, which the switch changes without changing what any
     -- version sees: read before, renewed after (tgsis.renew_conflict_marks), solved conflicts stay solved

@@ -51,7 +51,13 @@
 -- vector property (role 'vector') travels through the merge as its k
 -- components <name>#i, scalar columns like the others (its old chunk's
 -- slices arr[:][i:i] unnested), and is encoded again as the rows of a 2-D
--- array (k NULLs at a hole and at a NULL vector).
+-- array (k NULLs at a hole and at a NULL vector). A point (role 'point': a
+-- G-map's vertex) travels as its 1-D array: the old chunk's flattened once
+-- per chunk and sliced, the upserts' aggregated per chunk in slot order as
+-- the rows of a 2-D array and read back by their ordinality, and the merged
+-- chunk's points aggregated as the rows of its 2-D array (m NULLs at a hole,
+-- m the chunk's); a point of no coordinates, or not of the length of the
+-- chunk's other points, is refused by name (TG100) before anything is locked.
 -- The callers take the objects' write locks and note the changed objects
 -- (tgsis.object_write_lock, tgsis.note_changed_objects), as they do for rows.
 -- A double precision key (model 2's times) is compared by the float8 =
@@ -91,6 +97,8 @@ DECLARE
     v_vals     text[];    -- every non-key column but the vector properties, in column order
     v_vecs     text[];    -- the vector properties (role 'vector': a 2-D array, slots x k)
     v_comps    text[];    -- their components, <name>#i (no property name holds '#'), written as scalar columns are
+    v_pts      text[];    -- the points (role 'point': a 2-D double precision array, slots x m, m per chunk)
+    v_uord     text := '';  -- ' ORDER BY u.slot' in the upserts' aggregates when a point rides in them by position
     v_first    record;    -- a class's first property column: its array's length is the chunk's
     v_missing  text;
     v_problem  text;
@@ -127,10 +135,14 @@ BEGIN
     v_vecs := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'vector' ORDER BY c.colorder);
     v_comps := ARRAY(SELECT c.name || '#' || i FROM tgsis.chunk_columns(p_table) c CROSS JOIN LATERAL generate_series(1, c.size) AS i
                       WHERE c.role = 'vector' ORDER BY c.colorder, i);
+    v_pts := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'point' ORDER BY c.colorder);
+    IF cardinality(v_pts) > 0 THEN
+        v_uord := ' ORDER BY u.slot';
+    END IF;
     SELECT c.name, c.role INTO v_first FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('value', 'vector') ORDER BY c.colorder LIMIT 1;
     -- a NULL value would be a hole in a model table; in a class's table only its NOT NULL columns refuse it
     v_notnull := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c
-                        WHERE c.role IN ('float', 'ref')
+                        WHERE c.role IN ('float', 'ref', 'point')
                            OR (c.role IN ('value', 'vector') AND EXISTS (SELECT FROM pg_attribute a WHERE a.attrelid = v_storage
                                                                 AND a.attname = c.name AND a.attnotnull))
                         ORDER BY c.colorder);
@@ -259,6 +271,41 @@ BEGIN
         END IF;
     END IF;
 
+    -- a point (role 'point') is a row of its chunk's 2-D array: every point written into a chunk has the length of
+    -- the chunk's others, or of another chunk of the object when the chunk is new (m, the object's embedding),
+    -- and at least one coordinate; refused by name (TG100), as the
+    -- switch refuses such an object (tgsis.store_in_chunks), before anything is locked or written
+    FOREACH v_missing IN ARRAY v_pts LOOP
+        EXECUTE format(
+            'SELECT format(%1$L, concat_ws(%2$L, %3$s), n.id, n.lo, n.hi, v.m)
+               FROM (SELECT %4$s, min(r.%5$I) AS id, min(coalesce(cardinality(r.%6$I), 0)) AS lo,
+                            max(coalesce(cardinality(r.%6$I), 0)) AS hi
+                       FROM %7$s r WHERE NOT r._delete GROUP BY %8$s) n
+               LEFT JOIN LATERAL (SELECT array_length(c.%6$I, 2) AS m FROM %9$s c WHERE %10$s AND %11$s
+                                   ORDER BY c.chunk = n.chunk DESC LIMIT 1) v ON true
+              WHERE n.lo = 0 OR n.lo <> n.hi OR n.lo <> v.m
+              ORDER BY %12$s LIMIT 1',
+            '(%s), from id %s: points of %s to %s coordinates, the chunk''s others %s', ', ',
+            (SELECT string_agg(format('n.%I', k), ', ' ORDER BY o) FROM unnest(v_keys) WITH ORDINALITY AS u(k, o)),
+            array_to_string(ARRAY(SELECT format('r.%I AS %I', k, k) FROM unnest(v_keys) AS k)
+                            || format('r.%I >> %s AS chunk', v_cc, v_shift), ', '),
+            v_cc, v_missing, p_rows,
+            array_to_string(ARRAY(SELECT format('r.%I', k) FROM unnest(v_keys) AS k) || format('r.%I >> %s', v_cc, v_shift), ', '),
+            v_chunk,
+            -- (the chunk's visible version, else another of the object's: a new chunk takes the object's m)
+            array_to_string(ARRAY(SELECT format('c.%1$I = n.%1$I', k) FROM unnest(v_keys) AS k), ' AND '),
+            v_vis,
+            array_to_string(ARRAY(SELECT format('n.%I', k) FROM unnest(v_keys) AS k) || 'n.chunk'::text, ', '))
+           INTO v_problem USING v_set;
+        IF v_problem IS NOT NULL THEN
+            RAISE EXCEPTION 'cannot write these rows into %: the points of a chunk are not all of one length', v_name
+                USING ERRCODE = 'TG100',
+                      DETAIL = format('Object %s; a chunk holds its points as the rows of a 2-D array, m coordinates each '
+                                      '(the embedding''s, at least one) in column %I; nothing was written.', v_problem, v_missing),
+                      HINT = 'give every point of the object its embedding''s m coordinates';
+        END IF;
+    END LOOP;
+
     -- the writing statement, from a template whose {parts} are made by format() from the column lists
     SELECT format('%I.%I', s.nspname, c.relname) INTO v_rows
       FROM pg_class c JOIN pg_namespace s ON s.oid = c.relnamespace WHERE c.oid = p_rows;
@@ -279,11 +326,15 @@ BEGIN
         'i_K', array_to_string(ARRAY(SELECT 'i.' || k FROM unnest(v_k) AS k), ', '),
         'match_c_k', array_to_string(ARRAY(SELECT format('c.%s = k.%s', k, k) FROM unnest(v_k) AS k), ' AND '),
         'arrays', array_to_string(ARRAY(SELECT format('v.%I', f) FROM unnest(v_floats) AS f)
+                                  -- (a point's first coordinates: NULL at a hole; the slot's point is sliced from the
+                                  -- chunk's flattened array, {pflat})
+                                  || ARRAY(SELECT format('v.%I[:][1:1]', pt) FROM unnest(v_pts) AS pt)
                                   -- (a vector property's components: the slices arr[:][i:i] of its 2-D array)
                                   || ARRAY(SELECT format('v.%I[:][%s:%s]', split_part(x, '#', 1), split_part(x, '#', 2),
                                                          split_part(x, '#', 2)) FROM unnest(v_comps) AS x)
                                   || ARRAY(SELECT format('v.%I, v.%I', r, r || '_wide') FROM unnest(v_refs) AS r), ', '),
-        'alias', array_to_string(ARRAY(SELECT quote_ident(f) FROM unnest(v_floats || v_comps) AS f)
+        'alias', array_to_string(ARRAY(SELECT quote_ident(f) FROM unnest(v_floats || ARRAY(SELECT pt || '#1' FROM unnest(v_pts) AS pt)
+                                                                          || v_comps) AS f)
                                  || ARRAY(SELECT format('%I, %I', r, r || '_wide') FROM unnest(v_refs) AS r), ', '),
         -- a slot present in the merged chunk: a model table's first double precision or vertex-id column is NOT NULL
         -- exactly there (those columns are NOT NULL; its 'value' columns, a G-map dart's acellid, may be NULL); a
@@ -291,7 +342,7 @@ BEGIN
         -- one of their holes, a new one when it is not deleted
         'mpresent', CASE WHEN v_reg.classname IS NOT NULL THEN 'm._present'
                          ELSE format('m.%I IS NOT NULL',
-                                     (SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref')
+                                     (SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'ref', 'point')
                                        ORDER BY c.colorder LIMIT 1)) END,
         'presentcol', CASE WHEN v_reg.classname IS NOT NULL
                            THEN format(', CASE WHEN u.slot IS NULL THEN o.slot <= coalesce(%s(v.%I%s), 0) '
@@ -301,9 +352,24 @@ BEGIN
                            ELSE '' END,
         'u_K', array_to_string(ARRAY(SELECT 'u.' || k FROM unnest(v_k) AS k), ', '),
         'match_ug_k', array_to_string(ARRAY(SELECT format('ug.%s = k.%s', k, k) FROM unnest(v_k) AS k), ' AND '),
-        'uarr', array_to_string(ARRAY(SELECT format('array_agg(u.%I) AS %I', c, c) FROM unnest(v_vals || v_comps) AS c), ', '),
-        'ugarr', array_to_string(ARRAY(SELECT format('ug.%I', c) FROM unnest(v_vals || v_comps) AS c), ', '),
-        'unames', array_to_string(ARRAY(SELECT quote_ident(c) FROM unnest(v_vals || v_comps) AS c), ', '),
+        'uord', v_uord,
+        'uarr', array_to_string(ARRAY(SELECT format('array_agg(u.%I%s) AS %I', c, v_uord, c) FROM unnest(v_vals || v_comps) AS c)
+                                -- a point: the chunk's upserts' points as the rows of a 2-D array in slot order (a
+                                -- delete's row m NULLs), read back by the upsert's ordinality ui
+                                || ARRAY(SELECT format('array_agg(coalesce(u.%1$I, array_fill(NULL::double precision, ARRAY[u.%2$I])) '
+                                                       'ORDER BY u.slot) AS %1$I', pt, pt || '#m') FROM unnest(v_pts) AS pt), ', '),
+        'ugarr', array_to_string(ARRAY(SELECT format(', ug.%I', c) FROM unnest(v_vals || v_comps) AS c), ''),
+        'unames', array_to_string(ARRAY(SELECT format(', %I', c) FROM unnest(v_vals || v_comps) AS c), ''),
+        -- a point's chunk length m: its points' (one length: checked above)
+        'pm', coalesce((SELECT string_agg(format(', max(cardinality(m.%I)) AS %I', pt, pt || '#m'), '') FROM unnest(v_pts) AS pt), ''),
+        -- a point's arrays flattened once per chunk (a MATERIALIZED CTE of the chunk's LATERAL subquery, joined by
+        -- m): the old chunk's (flat, m) and the upserts' (uflat, um)
+        -- (NULLs, at holes and deletes, made 0 and never read: no slice carries a NULL bitmap, which array_agg would keep)
+        'pflat', coalesce((SELECT string_agg(format('%2$I AS MATERIALIZED (SELECT ARRAY(SELECT coalesce(x, 0) FROM unnest(v.%1$I) AS x) AS flat, '
+                                                    'array_length(v.%1$I, 2) AS m, ARRAY(SELECT coalesce(x, 0) FROM unnest(ug.%1$I) AS x) AS uflat, '
+                                                    'array_length(ug.%1$I, 2) AS um), ', pt, 'p#' || pt), '')
+                             FROM unnest(v_pts) AS pt), ''),
+        'pjoin', coalesce((SELECT string_agg(format(' CROSS JOIN %I', 'p#' || pt), '') FROM unnest(v_pts) AS pt), ''),
         'mvals', array_to_string(ARRAY(
             SELECT format('CASE WHEN u.slot IS NULL THEN %s WHEN NOT u._delete THEN u.%I END AS %I',
                           CASE WHEN c = ANY (v_refs)
@@ -311,12 +377,23 @@ BEGIN
                                            CASE WHEN c = v_refs[1] THEN format('o.%I', c) ELSE format('o.%I + o.%I', v_refs[1], c) END,
                                            c || '_wide')
                                ELSE format('o.%I', c) END, c, c)
-              FROM unnest(v_vals || v_comps) AS c), ', '),
+              FROM unnest(v_vals || v_comps) AS c)
+            -- a point: the old chunk's slot sliced from its flattened array, or the upsert's from the upserts' (ui)
+            || ARRAY(SELECT format('CASE WHEN u.slot IS NULL THEN CASE WHEN o.%1$I IS NOT NULL '
+                                   'THEN %2$I.flat[(o.slot - 1) * %2$I.m + 1 : o.slot * %2$I.m] END '
+                                   'WHEN NOT u._delete THEN %2$I.uflat[(u.ui - 1) * %2$I.um + 1 : u.ui * %2$I.um] END AS %3$I',
+                                   pt || '#1', 'p#' || pt, pt)
+                       FROM unnest(v_pts) AS pt), ', '),
         'rvals', array_to_string(ARRAY(SELECT format('r.%I::%s AS %I', c.name, c.typename, c.name)
                                          FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'value') ORDER BY c.colorder)
                                  || ARRAY(SELECT format('r.%I::bigint AS %I', r, r) FROM unnest(v_refs) AS r)
                                  || ARRAY(SELECT format('(r.%I)[%s] AS %I', split_part(x, '#', 1), split_part(x, '#', 2), x)
-                                            FROM unnest(v_comps) AS x), ', '),
+                                            FROM unnest(v_comps) AS x)
+                                 -- a point, and its chunk's m (every written point of a chunk has it: checked above)
+                                 || ARRAY(SELECT format('CASE WHEN NOT r._delete THEN r.%1$I END AS %1$I, '
+                                                        'coalesce(max(cardinality(r.%1$I)) FILTER (WHERE NOT r._delete) '
+                                                        'OVER (PARTITION BY %2$s), 1) AS %3$I', pt, v_newk, pt || '#m')
+                                            FROM unnest(v_pts) AS pt), ', '),
         -- a chunk's refs are relative when every difference fits integer, else absolute in the _wide columns
         -- (and the maxima of vtop, the chunk's bound of its vertex ids: vbase + 2 * the largest relative value, or
         -- the largest _wide id; chunk_encoding_checks says why twice)
@@ -340,6 +417,10 @@ BEGIN
                                    (SELECT string_agg(format('m.%I', x), ', ' ORDER BY i)
                                       FROM unnest(v_comps) WITH ORDINALITY AS y(x, i) WHERE split_part(x, '#', 1) = vv), vv)
                        FROM unnest(v_vecs) AS vv)
+            -- a point: the slots' points as the rows of a 2-D array (m NULLs at a hole)
+            || ARRAY(SELECT format('array_agg(coalesce(m.%1$I, array_fill(NULL::double precision, ARRAY[e.%2$I])) ORDER BY m.slot) AS %1$I',
+                                   pt, pt || '#m')
+                       FROM unnest(v_pts) AS pt)
             || ARRAY(SELECT format('CASE WHEN e.fits THEN array_agg(CASE WHEN e.fits THEN (m.%I - %s)::integer END ORDER BY m.slot) FILTER (WHERE e.fits) END AS %I',
                                    r, CASE WHEN r = v_refs[1] THEN 'e.vmin' ELSE format('m.%I', v_refs[1]) END, r)
                      FROM unnest(v_refs) AS r)
@@ -347,21 +428,21 @@ BEGIN
                      FROM unnest(v_refs) AS r), ', '),
         'setcols', array_to_string(ARRAY['holes = n.holes']
                                    || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['vbase = n.vbase', 'vtop = n.vtop'] ELSE '{}'::text[] END
-                                   || ARRAY(SELECT format('%I = n.%I', c, c) FROM unnest(v_vals || v_vecs) AS c)
+                                   || ARRAY(SELECT format('%I = n.%I', c, c) FROM unnest(v_vals || v_vecs || v_pts) AS c)
                                    || ARRAY(SELECT format('%I = n.%I', r || '_wide', r || '_wide') FROM unnest(v_refs) AS r), ', '),
         'inscols', array_to_string(v_k || ARRAY['revision', 'holes']
                                    || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['vbase', 'vtop'] ELSE '{}'::text[] END
-                                   || ARRAY(SELECT quote_ident(c) FROM unnest(v_vals || v_vecs) AS c)
+                                   || ARRAY(SELECT quote_ident(c) FROM unnest(v_vals || v_vecs || v_pts) AS c)
                                    || ARRAY(SELECT quote_ident(r || '_wide') FROM unnest(v_refs) AS r), ', '),
         -- a chunk whose new content is the visible one bit for bit (array_send: -0.0 is not 0.0) is not written
         'same', array_to_string(ARRAY['z.holes IS NOT DISTINCT FROM v.holes']
                                 || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['z.vbase IS NOT DISTINCT FROM v.vbase'] ELSE '{}'::text[] END
                                 || ARRAY(SELECT format('array_send(z.%1$I) IS NOT DISTINCT FROM array_send(v.%1$I)', c)
-                                           FROM unnest(v_vals || v_vecs || ARRAY(SELECT r || '_wide' FROM unnest(v_refs) AS r)) AS c),
+                                           FROM unnest(v_vals || v_vecs || v_pts || ARRAY(SELECT r || '_wide' FROM unnest(v_refs) AS r)) AS c),
                                 ' AND '),
         'insvals', array_to_string(ARRAY(SELECT 'n.' || k FROM unnest(v_k) AS k) || ARRAY['$2', 'n.holes']
                                    || CASE WHEN cardinality(v_refs) > 0 THEN ARRAY['n.vbase', 'n.vtop'] ELSE '{}'::text[] END
-                                   || ARRAY(SELECT 'n.' || quote_ident(c) FROM unnest(v_vals || v_vecs) AS c)
+                                   || ARRAY(SELECT 'n.' || quote_ident(c) FROM unnest(v_vals || v_vecs || v_pts) AS c)
                                    || ARRAY(SELECT 'n.' || quote_ident(r || '_wide') FROM unnest(v_refs) AS r), ', '));
     v_sql := $q$
 WITH k AS (
@@ -369,7 +450,7 @@ WITH k AS (
 ), upsert AS (
     SELECT {newk_as}, (r.{cc} & {mask}) + 1 AS slot, r._delete, {rvals} FROM {rows} r WHERE {todo}
 ), ug AS (  -- the upserts and deletes of each touched chunk, as arrays (a few per chunk)
-    SELECT {u_K}, max(u.slot) AS umax, array_agg(u.slot) AS uslot, array_agg(u._delete) AS udel, {uarr}
+    SELECT {u_K}, max(u.slot) AS umax, array_agg(u.slot{uord}) AS uslot, array_agg(u._delete{uord}) AS udel, {uarr}
       FROM upsert u GROUP BY {u_K}
 ), en AS (  -- each touched chunk merged and encoded on its own (its slots sorted in memory, not the whole write's)
     SELECT {k_K}, v.vtoid, v.vtid, v.revision AS vrev, z.*,
@@ -379,12 +460,12 @@ WITH k AS (
         SELECT c.tableoid AS vtoid, c.ctid AS vtid, c.* FROM {chunk} c WHERE {match_c_k} AND {vis}
       ) v ON true
      CROSS JOIN LATERAL (
-        WITH m AS MATERIALIZED (  -- every slot up to the last old or new one: the value written (NULL: a hole)
+        WITH {pflat}m AS MATERIALIZED (  -- every slot up to the last old or new one: the value written (NULL: a hole)
             SELECT o.slot, {mvals}{presentcol}  -- (the NULL array as long as the last new slot extends the old arrays to it)
-              FROM unnest({arrays}, array_fill(NULL::integer, ARRAY[ug.umax::integer])) WITH ORDINALITY AS o({alias}, pad, slot)
-              LEFT JOIN unnest(ug.uslot, ug.udel, {ugarr}) AS u(slot, _delete, {unames}) ON u.slot = o.slot
+              FROM unnest({arrays}, array_fill(NULL::integer, ARRAY[ug.umax::integer])) WITH ORDINALITY AS o({alias}, pad, slot){pjoin}
+              LEFT JOIN unnest(ug.uslot, ug.udel{ugarr}) WITH ORDINALITY AS u(slot, _delete{unames}, ui) ON u.slot = o.slot
         ), e AS (
-            SELECT max(m.slot) FILTER (WHERE {mpresent}) AS last, {fit} FROM m
+            SELECT max(m.slot) FILTER (WHERE {mpresent}) AS last, {fit}{pm} FROM m
         )
         SELECT e.last, CASE WHEN e.fits THEN e.vmin END AS vbase, e.vtop, f.*
           FROM e LEFT JOIN LATERAL (

@@ -64,10 +64,10 @@ BEGIN
                   HINT = 'write the rows of a table stored as rows through its view or storage';
     END IF;
     -- (a model table with columns of role 'value', a G-map dart's acellid and positive: this path's arrays do not
-    -- carry them, which would be left NULL)
-    IF EXISTS (SELECT FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'value') THEN
+    -- carry them, which would be left NULL; nor a G-map's point, role 'point': a 2-D array per chunk)
+    IF EXISTS (SELECT FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('value', 'point')) THEN
         RAISE EXCEPTION 'tgsis.% has columns tgsis.write_object_rows does not write: %', quote_ident(p_table),
-                        (SELECT string_agg(c.name, ', ' ORDER BY c.colorder) FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'value')
+                        (SELECT string_agg(c.name, ', ' ORDER BY c.colorder) FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('value', 'point'))
             USING ERRCODE = 'TG100',
                   HINT = format('write its rows through the face tgsis.%I or tgsis.insert_chunk_rows', p_table);
     END IF;

@@ -158,13 +158,14 @@ VALUES (4, 'generalized maps in time', 'GMAP', '{GMAP}',
 -- level): docs/storage.md, "G-maps (models 4 and 5)"; stored as rows until tgsis.store_in_chunks switches them:
 -- chunkdefault false. The node and the dart partner are vertex-id columns (refs, relative to the chunk's
 -- smallest); a dart's acellid and positive may be NULL: arrays of their own type, holes marked by holes. The
--- instants, nodes, cells and the positions (a float8[] coordinate per row: no chunk form yet) stay rows.)
+-- instants, nodes and cells stay rows. The positions are registered for chunks by nodeid, keyed (geoid, timem,
+-- timet, chunk), a 2-D float8 array per chunk (slots x m: the role 'point'), stored as rows until switched too.)
 INSERT INTO tgsis.model_tables (tablename, model, iudorder, description, chunkcolumn, chunkrefs, chunksize, chunkdefault) VALUES
     ('gmap',        4, 1, 'the dimensions of a G-map', NULL, '{}', NULL, false),
     ('gmap_timem',  4, 1, 'a topology instant (start of a topology period) of a G-map', NULL, '{}', NULL, false),
     ('gmap_timet',  4, 2, 'a geometry instant of a topology period', NULL, '{}', NULL, false),
     ('gmap_node',   4, 2, 'a point of the embedding of a topology period', NULL, '{}', NULL, false),
-    ('gmap_vertex', 4, 2, 'the position of a node at a geometry instant', NULL, '{}', NULL, false),
+    ('gmap_vertex', 4, 2, 'the position of a node at a geometry instant', 'nodeid', '{}', 1024, false),
     ('gmap_dart',   4, 2, 'a dart of a topology period', 'dartid', '{nodeid}', 1024, false),
     ('gmap_alpha',  4, 2, 'the image of a dart under one involution', 'dartid', '{dartid2}', 1024, false),
     ('gmap_cell',   4, 2, 'an abstract cell of the property level', NULL, '{}', NULL, false);

@@ -109,10 +109,11 @@ INSERT INTO tgsis.data_models (model, name, timemodel, geotypes, cell_levels, cr
 VALUES (5, 'multiply indexed G-maps', 'MULTIDIM', '{GMAP}', true, 'create_model5_storage', 'md_extent', 'check_md_geometry',
         'n-G-maps in R^m whose extra axes are time, knowledge, scale or uncertainty (a surface over knowledge is a volume)');
 -- (the darts and the involutions are registered for chunks by dartid as model 4's: model4/storage.sql; the
--- points, a float8[] coordinate per row GiST-indexed as a cube, stay rows: no chunk form yet)
+-- points by vrtxid, a 2-D float8 array per chunk (slots x m: the role 'point', docs/storage.md, "The points in
+-- chunks"); all stored as rows until tgsis.store_in_chunks switches them)
 INSERT INTO tgsis.model_tables (tablename, model, iudorder, description, chunkcolumn, chunkrefs, chunksize, chunkdefault) VALUES
     ('md_gmap',   5, 1, 'the dimensions, axes and extent of a multiply indexed G-map', NULL, '{}', NULL, false),
-    ('md_vertex', 5, 2, 'a point in R^m', NULL, '{}', NULL, false),
+    ('md_vertex', 5, 2, 'a point in R^m', 'vrtxid', '{}', 1024, false),
     ('md_dart',   5, 2, 'a dart', 'dartid', '{vrtxid}', 1024, false),
     ('md_alpha',  5, 2, 'the image of a dart under one involution', 'dartid', '{dartid2}', 1024, false),
     ('md_cell',   5, 2, 'a cell of the property level', NULL, '{}', NULL, false);

@@ -122,11 +122,12 @@ UPDATE tgsis.model_tables t SET chunkcolumn = c.chunkcolumn, chunkrefs = c.chunk
                ('times_vrtx', 'vrtxid', '{}', true), ('times_trgl', 'trglid', '{vrtxid1,vrtxid2,vrtxid3}', true),
                ('d4dtrgl', 'trglid', '{nodeid1,nodeid2,nodeid3}', false), ('d4dvrtx', 'nodeid', '{}', false),
                ('gmap_dart', 'dartid', '{nodeid}', false), ('gmap_alpha', 'dartid', '{dartid2}', false),
-               ('md_dart', 'dartid', '{vrtxid}', false), ('md_alpha', 'dartid', '{dartid2}', false))
+               ('md_dart', 'dartid', '{vrtxid}', false), ('md_alpha', 'dartid', '{dartid2}', false),
+               ('gmap_vertex', 'nodeid', '{}', false), ('md_vertex', 'vrtxid', '{}', false))
        AS c (tablename, chunkcolumn, chunkrefs, dflt)
  WHERE t.tablename = c.tablename;
 -- @handled model1/storage.sql
--- (the G-map darts and involutions, models 4 and 5: registered for chunks, stored as rows until switched)
+-- (the G-map darts, involutions and points, models 4 and 5: registered for chunks, stored as rows until switched)
 -- @handled model4/storage.sql
 -- @handled model5/storage.sql
 

@@ -33,13 +33,13 @@ BEGIN
         RETURN tgsis.storage_row_versions('tgsis', p_table);
     END IF;
     v_ids := ARRAY(SELECT DISTINCT i FROM unnest(p_vertex_ids) AS i WHERE i IS NOT NULL ORDER BY 1);
-    EXECUTE format('SELECT d.select_list, d.arrays, d.aliases, d.present FROM tgsis.%I($1, $2) AS d', 'chunk_decode_sql')
+    EXECUTE format('SELECT d.select_list, d.arrays, d.aliases, d.present, d.joins FROM tgsis.%I($1, $2) AS d', 'chunk_decode_sql')
        INTO v_dec USING p_table, 'c';
     -- width_bucket(x, ids): how many of the sorted ids are at most x
-    RETURN format('(SELECT %s, c.revision, c.lastrevs, c.revclosed FROM tgsis.%I c CROSS JOIN LATERAL unnest(%s) WITH ORDINALITY AS u(%s, o)'
+    RETURN format('(SELECT %s, c.revision, c.lastrevs, c.revclosed FROM tgsis.%I c%s CROSS JOIN LATERAL unnest(%s) WITH ORDINALITY AS u(%s, o)'
                   ' WHERE %s AND width_bucket(c.vtop, %L::bigint[])'
                   ' > CASE WHEN c.vbase IS NULL THEN 0 ELSE width_bucket(c.vbase - 1, %L::bigint[]) END)',
-                  v_dec.select_list, p_table || '_chunk', v_dec.arrays, v_dec.aliases, v_dec.present, v_ids, v_ids);
+                  v_dec.select_list, p_table || '_chunk', v_dec.joins, v_dec.arrays, v_dec.aliases, v_dec.present, v_ids, v_ids);
 END
 $$;
 

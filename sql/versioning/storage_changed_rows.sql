@@ -55,25 +55,26 @@ BEGIN
                      ORDER BY 1);
     EXECUTE format('SELECT tgsis.%I($1)', 'chunk_key') INTO v_key USING p_table;
     v_kk := array_to_string(ARRAY(SELECT format('k.%I', k) FROM unnest(v_key) AS k) || 'k.chunk'::text, ', ');
-    -- a slot's signature: its decoded values, floats by their send forms (bit for bit); true first, never NULL
+    -- a slot's signature: its decoded values, floats and points by their send forms (bit for bit); true first, never NULL
     EXECUTE format('SELECT string_agg(CASE WHEN c.role IN (%L, %L) AND c.typename = %L THEN format(%L, c.name)
                                            WHEN c.role IN (%L, %L) AND c.typename = %L THEN format(%L, c.name)
+                                           WHEN c.role = %L THEN format(%L, c.name)
                                            ELSE format(%L, c.name) END, %L ORDER BY c.colorder)
-                      FROM tgsis.%I($1) AS c WHERE c.role IN (%L, %L, %L)',
+                      FROM tgsis.%I($1) AS c WHERE c.role IN (%L, %L, %L, %L)',
                    'float', 'value', 'double precision', 'float8send(s.%I)',
-                   'float', 'value', 'real', 'float4send(s.%I)', 's.%I', ', ',
-                   'chunk_columns', 'float', 'value', 'ref')
+                   'float', 'value', 'real', 'float4send(s.%I)', 'point', 'array_send(s.%I)', 's.%I', ', ',
+                   'chunk_columns', 'float', 'value', 'ref', 'point')
        INTO v_sig USING p_table;
     FOREACH v_a IN ARRAY ARRAY['b', 'p', 'q'] LOOP
-        EXECUTE format('SELECT d.select_list, d.arrays, d.aliases, d.present FROM tgsis.%I($1, $2) AS d', 'chunk_decode_sql')
+        EXECUTE format('SELECT d.select_list, d.arrays, d.aliases, d.present, d.joins FROM tgsis.%I($1, $2) AS d', 'chunk_decode_sql')
            INTO v_dec USING p_table, v_a;
         -- the slots present in the chunk version the set sees, with their signatures
         v_side := v_side || format(
             '(SELECT s.o, ROW(true, %s) AS sig
-                FROM (SELECT u.o, %s FROM tgsis.%I %s CROSS JOIN LATERAL unnest(%s) WITH ORDINALITY AS u(%s, o)
+                FROM (SELECT u.o, %s FROM tgsis.%I %s%s CROSS JOIN LATERAL unnest(%s) WITH ORDINALITY AS u(%s, o)
                        WHERE %s AND %s.revision = ANY (%L::integer[])
                          AND NOT (%s.revclosed AND %s.lastrevs && %L::integer[]) AND %s) AS s)',
-            v_sig, v_dec.select_list, p_table || '_chunk', v_a, v_dec.arrays, v_dec.aliases,
+            v_sig, v_dec.select_list, p_table || '_chunk', v_a, v_dec.joins, v_dec.arrays, v_dec.aliases,
             (SELECT string_agg(format('%I.%I = k.%I', v_a, k, k), ' AND ') FROM unnest(v_key || 'chunk'::text) AS k),
             v_a, CASE v_a WHEN 'b' THEN p_base WHEN 'p' THEN p_parent ELSE p_child END,
             v_a, v_a, CASE v_a WHEN 'b' THEN p_base WHEN 'p' THEN p_parent ELSE p_child END, v_dec.present);
@@ -88,18 +89,18 @@ BEGIN
         v_kk, v_side[1], v_side[2], v_side[3],
         array_to_string(ARRAY(SELECT format('c.%I', k) FROM unnest(v_key) AS k) || 'c.chunk'::text, ', '),
         p_table || '_chunk', v_key[1], coalesce(p_geoids, '{}'), v_since, v_since);
-    EXECUTE format('SELECT d.select_list, d.arrays, d.aliases, d.present FROM tgsis.%I($1, $2) AS d', 'chunk_decode_sql')
+    EXECUTE format('SELECT d.select_list, d.arrays, d.aliases, d.present, d.joins FROM tgsis.%I($1, $2) AS d', 'chunk_decode_sql')
        INTO v_dec USING p_table, 'c';
     -- (the changed slots MATERIALIZED: computed once per chunk, not per decoded slot that tests them)
     RETURN format('(WITH w AS MATERIALIZED %s
                     SELECT %s, c.revision, c.lastrevs, c.revclosed
-                      FROM w JOIN tgsis.%I c ON %s AND cardinality(w.slots) > 0
+                      FROM w JOIN tgsis.%I c ON %s AND cardinality(w.slots) > 0%s
                      CROSS JOIN LATERAL unnest(%s) WITH ORDINALITY AS u(%s, o)
                      WHERE %s AND u.o = ANY (w.slots)
                        AND (c.revision = ANY (%L::integer[]) OR (c.revclosed AND c.lastrevs && %L::integer[])))',
                   v_one, v_dec.select_list, p_table || '_chunk',
                   (SELECT string_agg(format('c.%I = w.%I', k, k), ' AND ') FROM unnest(v_key || 'chunk'::text) AS k),
-                  v_dec.arrays, v_dec.aliases, v_dec.present,
+                  v_dec.joins, v_dec.arrays, v_dec.aliases, v_dec.present,
                   v_since, v_since);
 END
 $$;

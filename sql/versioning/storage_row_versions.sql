@@ -39,11 +39,11 @@ BEGIN
         RETURN format('%I.%I', p_schema, p_table || '_chunk_rows');
     END IF;
     EXECUTE format('SELECT r.chunksize FROM tgsis.%I($1) AS r', 'chunk_registry') INTO v_size USING v_name;
-    EXECUTE format('SELECT d.select_list, d.arrays, d.aliases, d.present FROM tgsis.%I($1, $2) AS d', 'chunk_decode_sql')
+    EXECUTE format('SELECT d.select_list, d.arrays, d.aliases, d.present, d.joins FROM tgsis.%I($1, $2) AS d', 'chunk_decode_sql')
        INTO v_dec USING v_name, 'c';
-    RETURN format('(SELECT %s, c.revision, c.lastrevs, c.revclosed FROM %I.%I c CROSS JOIN LATERAL unnest(%s) WITH ORDINALITY AS u(%s, o)'
+    RETURN format('(SELECT %s, c.revision, c.lastrevs, c.revclosed FROM %I.%I c%s CROSS JOIN LATERAL unnest(%s) WITH ORDINALITY AS u(%s, o)'
                   ' WHERE %s AND c.chunk = ANY (%L::bigint[]))',
-                  v_dec.select_list, p_schema, p_table || '_chunk', v_dec.arrays, v_dec.aliases, v_dec.present,
+                  v_dec.select_list, p_schema, p_table || '_chunk', v_dec.joins, v_dec.arrays, v_dec.aliases, v_dec.present,
                   ARRAY(SELECT DISTINCT i / v_size FROM unnest(p_ids) AS i WHERE i >= 0 ORDER BY 1));
 END
 $$;

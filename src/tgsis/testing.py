@@ -372,8 +372,8 @@ def time_storage() -> Literal["rows", "chunks"] | None:
     """The storage forced on the time models' tables in the templates: ``$TGSIS_TEST_TIME_STORAGE``, else ``None``.
 
     The tables of models 2 to 5 registered for chunks (``tgsis.model_tables.chunkcolumn``): model 2's
-    times_vrtx and times_trgl, model 3's d4dtrgl and d4dvrtx, the G-maps' gmap_dart, gmap_alpha, md_dart
-    and md_alpha.
+    times_vrtx and times_trgl, model 3's d4dtrgl and d4dvrtx, the G-maps' gmap_dart, gmap_alpha, md_dart,
+    md_alpha and their points gmap_vertex and md_vertex.
 
     ``None`` (unset, or :data:`TIME_BY_FILE`): the templates as the install leaves them. Model 2's time tables
     are stored in chunks by default (``chunkdefault``) as model 1's are, so they follow the template's storage

@@ -1026,7 +1026,8 @@ def upload_rows(conn: Conn, table: str, columns: Sequence[tuple[str, npt.ArrayLi
     bool
         False, with nothing written, when the chunk table holds chunks of one of these objects already (in any
         version or revision), or the role may not read the chunk table (granted the face alone), or a key is
-        negative (a ``level``: the row table's CHECK, which the server's path applies): the caller then writes through ``tgsis.insert_chunk_rows`` (:meth:`Storage.copy`),
+        negative (a ``level``: the row table's CHECK, which the server's path applies), or the table is a G-map's
+        points (``gmap_vertex``, ``md_vertex``: a column ``float8[m]``, which this codec does not encode yet): the caller then writes through ``tgsis.insert_chunk_rows`` (:meth:`Storage.copy`),
         which answers as the rows would.
 
     Raises
@@ -1039,6 +1040,8 @@ def upload_rows(conn: Conn, table: str, columns: Sequence[tuple[str, npt.ArrayLi
     psycopg.errors.InsufficientPrivilege
         The role lacks INSERT on the chunk table, or the class's right.
     """
+    if any(wire.startswith("float8[") for _, _, wire in columns):
+        return False  # a G-map's points (a 2-D array per chunk: no client codec yet): the server's path
     layout = chunk_table(conn, table, values=True)
     if not layout.readable:  # a role granted the face alone: the server's path, which answers as the rows
         return False

@@ -16,6 +16,7 @@ import contextvars
 import itertools
 import json
 import logging
+import re
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any, Protocol, TypeVar, cast
@@ -489,11 +490,23 @@ def _chunk_rows_arguments(
     table: str, columns: Sequence[tuple[str, npt.ArrayLike, str]]
 ) -> tuple[list[str], Any, Any, Any]:
     """(names, ints, floats, bools) of ``tgsis.insert_chunk_rows`` and its kin: the integer, double and boolean
-    columns, each as (columns x rows) lists (floats and bools None when there are none)."""
+    columns, each as (columns x rows) lists (floats and bools None when there are none). A point of a G-map's
+    vertex table (wire type ``float8[m]``, values (rows, m)) goes as m double rows of its name in a row."""
     ints = [(n, np.asarray(v, dtype=np.int64)) for n, v, w in columns if w in ("int8", "int4", "int2")]
-    floats = [(n, np.asarray(v, dtype=np.float64)) for n, v, w in columns if w == "float8"]
+    floats: list[tuple[str, npt.NDArray[np.float64]]] = []
+    for n, v, w in columns:
+        if w == "float8":
+            floats.append((n, np.asarray(v, dtype=np.float64)))
+        elif re.fullmatch(r"float8\[\d+\]", w):
+            coordinates = np.asarray(v, dtype=np.float64)
+            if coordinates.ndim != 2 or coordinates.shape[1] != int(w[7:-1]):
+                raise InvalidInputError(
+                    f"tgsis.{table}: the points of column {n} are ({len(coordinates)}, {w[7:-1]}) doubles",
+                    detail=f"shape {coordinates.shape}",
+                )
+            floats.extend((n, coordinates[:, i]) for i in range(coordinates.shape[1]))
     bools = [(n, np.asarray(v, dtype=np.bool_)) for n, v, w in columns if w == "bool"]
-    if len(ints) + len(floats) + len(bools) != len(columns):
+    if len(ints) + len({n for n, _ in floats}) + len(bools) != len(columns):
         raise InvalidInputError(
             f"tgsis.{table}: rows stored in chunks are written as integer, double precision and boolean columns only",
             detail=f"columns {[(n, w) for n, _, w in columns]}",
