@@ -66,7 +66,8 @@ BEGIN
         SELECT coalesce(jsonb_object_agg(p ->> 'name', (p ->> 'size')::integer), '{}') INTO v_sizes
           FROM tgsis.catalog c CROSS JOIN LATERAL jsonb_array_elements(c.cell_properties) AS p
          WHERE c.classname = v_reg.classname AND p ? 'size' AND (p ->> 'size')::integer > 1
-           AND coalesce(p ->> 'alignment', c.proalignment) = c.proalignment;
+           -- (the properties of this table: the class's alignment in cellprotable, the other's in otherprotable)
+           AND (coalesce(p ->> 'alignment', c.proalignment) = c.proalignment) = (c.cellprotable = v_reg.tablename);
     END IF;
     v_storage := tgsis.row_shape(p_table);  -- the row storage, or its shape once stored in chunks
     IF v_storage IS NULL THEN

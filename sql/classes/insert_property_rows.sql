@@ -17,8 +17,13 @@
 -- the other columns their defaults. Only models whose vertex and cell
 -- properties are keyed by vertex or simplex id alone (no time key, no cell
 -- levels: static objects) are handled; others are refused (TG103), nothing
--- written. Returns the geometries and the rows (vertices or cells, not row
--- versions) given. Runs as its callers (tgsis's owner).
+-- written. A table stored in chunks (tgsis.store_class_in_chunks) gets its
+-- rows through its face (each touched chunk written once, at the statement's
+-- end) when the class is unversioned; versioned, it is refused by name
+-- (TG103: no writer of chunks makes the chunk versions of every revision;
+-- the HINT says to go by rows). Returns the geometries and the rows
+-- (vertices or cells, not row versions) given. Runs as its callers (tgsis's
+-- owner).
 CREATE FUNCTION tgsis.insert_property_rows(p_class tgsis.catalog, p_table text, p_geoids bigint[], p_columns text[],
                                            p_values text[], OUT features bigint, OUT rows bigint)
 LANGUAGE plpgsql
@@ -31,6 +36,7 @@ DECLARE
                             WHEN p_class.proalignment = 'VERTEX' THEN 'CELL' ELSE 'VERTEX' END;
     v_versioned boolean := EXISTS (SELECT FROM tgsis.versioned_tables t
                                     WHERE t.schemaname = p_class.schemaname AND t.tablename = p_table);
+    v_chunked  boolean := tgsis.stored_in_chunks(p_class.schemaname, p_table);
     v_sources  text[];
     v_source   text;
     v_selects  text[] := '{}';
@@ -49,6 +55,16 @@ BEGIN
             USING ERRCODE = 'TG103',
                   DETAIL = 'Its vertex or cell property rows are keyed by time or by cell level as well; a class registered without such properties stores none.',
                   HINT = 'register a new class with the property and copy the features into it';
+    END IF;
+    IF v_chunked AND v_versioned THEN
+        -- the rows of every version would be chunk versions of every revision, which no writer of chunks makes
+        -- (the face and tgsis.write_property_rows write the working revision)
+        RAISE EXCEPTION 'feature class % has % stored geometries without rows in %, which is versioned and stored in chunks',
+                p_class.classname, cardinality(p_geoids), p_table
+            USING ERRCODE = 'TG103',
+                  DETAIL = 'Rows made for every version are written into row versions; a versioned table in chunks has none.',
+                  HINT = format('store the class as rows (SELECT tgsis.store_class_in_rows(%L)), make the rows, then store it in chunks again',
+                                p_class.classname);
     END IF;
     v_sources := CASE WHEN v_align = 'VERTEX' THEN ARRAY['vrtx']
                       WHEN p_class.geotype = 'GEOMETRYCOLLECTION' THEN ARRAY['point', 'segment', 'trgl', 'tetra']
@@ -74,7 +90,9 @@ BEGIN
     END LOOP;
     EXECUTE format('WITH made AS (INSERT INTO %s (_geoid, _idx%s%s) SELECT r.* %s FROM (%s) AS r RETURNING _geoid, _idx)
                     SELECT count(DISTINCT _geoid), count(DISTINCT (_geoid, _idx)) FROM made',
-                   tgsis.storage_table(p_class.schemaname, p_table),
+                   -- in chunks (unversioned): through the face, whose trigger writes each touched chunk once
+                   CASE WHEN v_chunked THEN format('%I.%I', p_class.schemaname, p_table)
+                        ELSE tgsis.storage_table(p_class.schemaname, p_table) END,
                    CASE WHEN v_versioned THEN ', revision, lastrevs' ELSE '' END,
                    (SELECT string_agg(format(', %I', c), '') FROM unnest(p_columns) AS c),
                    (SELECT string_agg(', ' || v, '') FROM unnest(p_values) AS v),
@@ -84,4 +102,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.insert_property_rows(tgsis.catalog, text, bigint[], text[], text[]) IS
-    'insert one row per vertex or cell of the given geometries into a vertex or cell property table of a static class (copying the revision and lastrevs of each vertex or simplex row version when versioned), the columns given set to the SQL expressions given; returns the geometries and rows given; TG103 for models keyed by time or cell level';
+    'insert one row per vertex or cell of the given geometries into a vertex or cell property table of a static class (copying the revision and lastrevs of each vertex or simplex row version when versioned), the columns given set to the SQL expressions given (a table stored in chunks through its face when unversioned); returns the geometries and rows given; TG103 for models keyed by time or cell level, and for a versioned table stored in chunks';

@@ -121,14 +121,16 @@ def _property_layout(conn: Conn, schema: str, table: str) -> PropertyChunks | No
         return None
     oid, _, readable, insertable, versioned, name = row
     # a vector property (size k in the catalog, as tgsis.chunk_columns reads it): a 2-D chunk array, slots x k,
-    # typed t[] as a scalar property's, so the catalog tells them apart
+    # typed t[] as a scalar property's, so the catalog tells them apart (the properties of this table: the class's
+    # alignment in cellprotable, the other's in otherprotable)
     vectors = dict(
         conn.execute(
             "SELECT p ->> 'name', (p ->> 'size')::integer FROM tgsis.catalog c "
             "CROSS JOIN LATERAL jsonb_array_elements(c.cell_properties) AS p "
-            "WHERE c.schemaname = %s AND c.cellprotable = %s AND p ? 'size' AND (p ->> 'size')::integer > 1 "
-            "AND coalesce(p ->> 'alignment', c.proalignment) = c.proalignment",
-            (schema, table),
+            "WHERE c.schemaname = %s AND %s IN (c.cellprotable, c.otherprotable) "
+            "AND p ? 'size' AND (p ->> 'size')::integer > 1 "
+            "AND (coalesce(p ->> 'alignment', c.proalignment) = c.proalignment) = (c.cellprotable = %s)",
+            (schema, table, table),
         ).fetchall()
     )
     attributes = conn.execute(
