@@ -193,13 +193,7 @@ BEGIN
     END IF;
     v_keys := ARRAY(SELECT DISTINCT g FROM unnest(v_dgeo || v_igeo) AS g ORDER BY g)::text[];
     v_versioned := EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table);
-    IF v_versioned THEN
-        PERFORM tgsis.write_revision();  -- TG002, TG301 before any lock is taken
-        PERFORM tgsis.check_objects_unlocked(v_reg.objectclass, v_keys);
-    ELSE
-        PERFORM tgsis.plain_write_check('tgsis', p_table);  -- TG305
-    END IF;
-    PERFORM tgsis.object_write_lock(v_reg.objectclass, v_keys);
+    PERFORM tgsis.object_write_prepare(p_table, v_reg.objectclass, v_keys);  -- TG301, TG303 or TG305; the locks
 
     -- the keys and rows, in a temporary table of tgsis's owner (the writer reads it in several statements); a
     -- second one for the rows when a key comes back with other bits (below)

@@ -142,12 +142,8 @@ BEGIN
                 PERFORM tgsis.require_read_committed('a set-based delete of versioned objects');
             END IF;
         END IF;
-        PERFORM tgsis.write_revision();  -- TG002, TG301 before any lock is taken
-        PERFORM tgsis.check_objects_unlocked(v_reg.objectclass, v_keys);
-    ELSE
-        PERFORM tgsis.plain_write_check('tgsis', p_table);  -- TG305
     END IF;
-    PERFORM tgsis.object_write_lock(v_reg.objectclass, v_keys);
+    PERFORM tgsis.object_write_prepare(p_table, v_reg.objectclass, v_keys);  -- TG301, TG303 or TG305; the locks
 
     -- the rows, in a temporary table of tgsis's owner (the writer reads it in several statements)
     v_tab := format('pg_temp.%I', 'tgsis_object_rows_' || p_table);
