@@ -17,7 +17,8 @@
 --   revision is viewed (tgsis.write_revision) and the objects not locked by
 --   another version (TG303), or TG305 for unversioned storage outside
 --   DEFAULT's working revision; then the objects' write locks, exclusively
---   (tgsis.object_write_lock: no face writer of them in flight).
+--   (tgsis.object_write_lock: no face writer of them in flight). These last
+--   three steps are tgsis.object_write_prepare, shared with write_object_rows.
 -- The keys and rows go into a temporary table of tgsis's owner (42501 for one
 -- the session made under that name): the keys as rows with _delete true,
 -- the rows with _delete false. Keys not visible are skipped (as a DELETE

@@ -23,7 +23,8 @@
 -- versioned table go or change (TG300, as tgsis.close_object_rows asks on rows;
 -- an edit that only adds is written at any isolation level, as on rows). The object's write lock is taken
 -- exclusively (tgsis.object_write_lock: no write through the face is in
--- flight on it), and the object is noted as changed in the working revision
+-- flight on it; the version's checks and the lock are
+-- tgsis.object_write_prepare, shared with chunk_rows_write), and the object is noted as changed in the working revision
 -- when a chunk was written (tgsis.record_changed_objects; never for revision
 -- 0). The rows go through a temporary table this function makes (owned by
 -- tgsis's owner: one the session made itself under that name is refused,
