@@ -6,7 +6,7 @@ table and schema in diag). A class in chunks has no row table; its writers (the 
 ``tgsis.write_property_rows``, both through ``tgsis.write_chunk_rows``) answered TG100 ("a row to write has a
 NULL value"). They now answer as the row table: 23502, the same message and diag fields, the first NULL
 column in column order, the same exception class of ``tgsis.errors.translate``, and nothing written. A
-collection's properties may be NULL on both storages (its members lack some).
+collection's properties may be NULL on both storages (its members lack some), its keys not.
 """
 
 from __future__ import annotations
@@ -37,6 +37,12 @@ BAD = [
     "INSERT INTO {t} (_geoid, _idx, porosity, facies) VALUES (1, 9000, 1, 1)",
     "INSERT INTO {t} (_geoid, _idx, normal) VALUES (1, 9001, ARRAY[1, 2, 3])",
     "INSERT INTO {t} (_geoid, _idx, normal, porosity, facies) VALUES (1, 9002, ARRAY[1, 2, 3], 1, 1), (1, 9003, NULL, 1, 1)",
+]
+#: a NULL key, in a collection too: the row table names the key column
+NULL_KEYS = [
+    "INSERT INTO {t} (_geoid, _idx, normal, porosity, facies) VALUES (NULL, 9004, ARRAY[1, 2, 3], 1, 1)",
+    "INSERT INTO {t} (_geoid, _idx, normal, porosity, facies) VALUES (1, NULL, NULL, 1, 1)",
+    "UPDATE {t} SET _idx = NULL WHERE _geoid = 1 AND _idx = 3",
 ]
 
 
@@ -94,13 +100,13 @@ def test_a_null_in_a_not_null_property_answers_as_the_row_table(conn: Conn, vers
     chunks = "SELECT c::text FROM public.inchunks_cellpros_chunk c ORDER BY _geoid, chunk, revision"
     chunk_rows = conn.execute(chunks).fetchall()
     named = set()
-    for statement in BAD:
+    for statement in BAD + NULL_KEYS:
         rows = _answer(conn, statement.format(t="public.onrows_cellpros"), "onrows")
         in_chunks = _answer(conn, statement.format(t="public.inchunks_cellpros"), "inchunks")
         assert rows[0] == "23502", rows
         assert in_chunks == rows, statement
         named.add(rows[3])
-    assert named == {"normal", "porosity"}
+    assert named == {"normal", "porosity", "_geoid", "_idx"}
     # a wrong vector (V2's 23514) names the same relation too, versioned or not
     check = "UPDATE {t} SET normal = ARRAY[1, 2] WHERE _geoid = 1 AND _idx = 3"
     rows = _answer(conn, check.format(t="public.onrows_cellpros"), "onrows")
@@ -121,4 +127,7 @@ def test_a_collection_s_properties_take_a_null_on_both_storages(conn: Conn) -> N
     for statement in BAD:
         for name in ("onrows", "inchunks"):
             assert _answer(conn, statement.format(t=f"public.{name}_cellpros"), name) == ("written",), statement
+    for statement in NULL_KEYS:
+        rows = _answer(conn, statement.format(t="public.onrows_cellpros"), "onrows")
+        assert rows[0] == "23502" and _answer(conn, statement.format(t="public.inchunks_cellpros"), "inchunks") == rows
     assert _rows(conn, "public.inchunks_cellpros") == _rows(conn, "public.onrows_cellpros")

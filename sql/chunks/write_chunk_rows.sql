@@ -45,9 +45,9 @@
 -- by several statements: another session could change it in between), or
 -- without the row table's columns (of its types) or _delete, a
 -- NULL key, value (of a model table: it would be a hole) or _delete, a
--- negative id, a key twice (TG100), a NULL in a class's NOT NULL property
--- (23502 naming the column, its table and schema, as the row table would: the
--- first such column in column order), a row
+-- negative id, a key twice (TG100), a NULL key or a NULL in a NOT NULL
+-- property of a class's row to write (23502 naming the column, its table and
+-- schema, as the row table would: the first such column in column order), a row
 -- breaking a CHECK constraint of the row table (23514 naming the constraint,
 -- as the table would: a vector property's value not NULL nor k values without
 -- NULL breaks its column's CHECK, and the detail says what it must be). A
@@ -79,7 +79,7 @@ DECLARE
     v_objclass text;      -- a model table's object class (tgsis.model_tables.objectclass); NULL for a class's table
     v_name     text;      -- the table as messages name it, schema-qualified
     v_notnull  text[];    -- columns a NULL value may not be written into (TG100: it would be a hole)
-    v_propnn   text[];    -- a class's NOT NULL properties: a NULL value is 23502, as the row table answers
+    v_propnn   text[];    -- a class's keys and NOT NULL properties: a NULL is 23502, as the row table answers
     v_chunk    regclass;
     v_storage  regclass;
     v_size     bigint;
@@ -146,9 +146,11 @@ BEGIN
                                                                 AND a.attname = c.name AND a.attnotnull))
                         ORDER BY c.colorder);
     v_propnn := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c
-                       WHERE v_reg.classname IS NOT NULL AND c.role IN ('value', 'vector')
-                         AND EXISTS (SELECT FROM pg_attribute a WHERE a.attrelid = v_storage
-                                                                  AND a.attname = c.name AND a.attnotnull)
+                       WHERE v_reg.classname IS NOT NULL
+                         AND (c.name = ANY (v_keys || v_cc)
+                              OR (c.role IN ('value', 'vector')
+                                  AND EXISTS (SELECT FROM pg_attribute a WHERE a.attrelid = v_storage
+                                                                           AND a.attname = c.name AND a.attnotnull)))
                        ORDER BY c.colorder);
 
     -- p_rows: a temporary table of this session, read by several statements (checks, locks, the write), so that
@@ -190,8 +192,11 @@ BEGIN
                      WHEN count(*) FILTER (WHERE r.%I < 0%s) > 0 THEN %L
                      WHEN count(*) <> count(DISTINCT (%s, r.%I)) THEN %L END
            FROM %s r',
+        -- (a class's row to write with a NULL key: 23502 below, as the row table answers)
         concat_ws(' OR ', 'r._delete IS NULL',
-                  (SELECT string_agg(format('r.%I IS NULL', k), ' OR ') FROM unnest(v_keys || v_cc) AS k)),
+                  CASE WHEN v_reg.classname IS NOT NULL THEN 'r._delete AND (' END
+                  || (SELECT string_agg(format('r.%I IS NULL', k), ' OR ') FROM unnest(v_keys || v_cc) AS k)
+                  || CASE WHEN v_reg.classname IS NOT NULL THEN ')' ELSE '' END),
         'a key or _delete is NULL',
         coalesce((SELECT string_agg(format('r.%I IS NULL', v), ' OR ') FROM unnest(v_notnull) AS v), 'false'),
         'a row to write has a NULL value',
@@ -203,16 +208,16 @@ BEGIN
         'a key is given twice',
         p_rows) INTO v_problem;
     IF v_problem = '23502' THEN
-        -- a NULL in a class's NOT NULL property: the row table's answer (its message, the column, table and schema
+        -- a NULL key or a NULL in a NOT NULL property of a class: the row table's answer (its message, the column, table and schema
         -- in diag), the first such column in column order
         FOREACH v_t IN ARRAY v_propnn LOOP
             EXECUTE format('SELECT EXISTS (SELECT FROM %s r WHERE NOT r._delete AND r.%I IS NULL)', p_rows, v_t) INTO v_more;
             IF v_more THEN
                 RAISE EXCEPTION 'null value in column "%" of relation "%" violates not-null constraint', v_t, v_rowrel
                     USING ERRCODE = 'not_null_violation', COLUMN = v_t, TABLE = v_rowrel, SCHEMA = v_reg.schemaname,
-                          DETAIL = format('Property %I of %s is NOT NULL; written into %s by chunks, nothing was written.',
+                          DETAIL = format('Column %I of %s is NOT NULL; written into %s by chunks, nothing was written.',
                                           v_t, v_name, v_chunk),
-                          HINT = format('give property %I a value in every row', v_t);
+                          HINT = format('give %I a value in every row', v_t);
             END IF;
         END LOOP;
     END IF;
