@@ -194,7 +194,7 @@ BEGIN
            FROM %s r',
         -- (a class's row to write with a NULL key: 23502 below, as the row table answers)
         concat_ws(' OR ', 'r._delete IS NULL',
-                  CASE WHEN v_reg.classname IS NOT NULL THEN 'r._delete AND (' END
+                  CASE WHEN v_reg.classname IS NOT NULL THEN 'r._delete AND (' ELSE '' END
                   || (SELECT string_agg(format('r.%I IS NULL', k), ' OR ') FROM unnest(v_keys || v_cc) AS k)
                   || CASE WHEN v_reg.classname IS NOT NULL THEN ')' ELSE '' END),
         'a key or _delete is NULL',
