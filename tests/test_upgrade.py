@@ -772,3 +772,39 @@ def test_the_upgrade_measures_again_the_model_5_extents_0_2_0_measured_with_a_na
         assert [r[0] for r in conn.execute("SELECT problem FROM tgsis.check_geometry(%s)", geoid)] == [
             "point without 2 finite coordinates"
         ]
+
+
+@pytest.mark.parametrize("method", ["extension", "sql"])
+def test_the_upgrade_leaves_versioned_model_5_extents_measured_with_a_nan_and_warns(
+    method: str, pg: TestServer, make_database: MakeDb, tmp_path: Path
+) -> None:
+    """Where model 5 is versioned, each version holds its own boxes: the upgrade rewrites none, a WARNING names
+    the geoids and how to refresh them; every row of the G-map is as before, and the refresh the hint names
+    then measures the box without the NaN point."""
+    _upgrade_route(method, pg)
+    with psycopg.connect(make_database()) as conn:
+        tgsis.install(conn, method=method, sources=_frozen(tmp_path, OLD))  # type: ignore[arg-type]
+        conn.execute(_MD_NAN)
+        conn.execute("SELECT tgsis.enable_feature_versioning()")
+        conn.commit()
+        reads = (
+            "SELECT m.geoid, m.extent::text, g.bbox::text FROM tgsis.md_gmap m JOIN tgsis.geometry g USING (geoid)",
+            "SELECT geoid, vrtxid, array_send(coordinate) FROM tgsis.md_vertex ORDER BY 1, 2",
+            "SELECT geoid, extent::text, revision, revclosed FROM tgsis.md_gmap_ver ORDER BY 1, 3",
+            "SELECT geoid, bbox::text, revision, revclosed FROM tgsis.geometry_ver ORDER BY 1, 3",
+        )
+        before = [conn.execute(q).fetchall() for q in reads]
+        ((geoid, extent, bbox),) = before[0]
+        assert (extent, bbox) == ("(-1, 0),(NaN, 5)", "(-1, 0, 0),(NaN, 5, 0)")
+        conn.commit()
+        warnings = _upgrade_now(conn, method)
+        assert len(warnings) == 1, warnings
+        message, detail, hint = warnings[0].split(" | ")
+        assert message == "the extents of 1 multiply indexed G-maps hold a NaN, as measured before 0.3.0"
+        assert detail == f"geoids {geoid}; they are versioned and were left as they are."
+        assert "tgsis.refresh_geometry" in hint
+        assert [conn.execute(q).fetchall() for q in reads] == before
+        conn.commit()
+        # the refresh the hint names, in the version holding them: measured without the NaN point
+        conn.execute("SELECT tgsis.refresh_geometry(%s)", (geoid,))
+        assert conn.execute(reads[0]).fetchall() == [(geoid, "(-1, 0),(0, 0.5)", "(-1, 0, 0),(0, 0.5, 0)")]

@@ -19,7 +19,8 @@
 --   revision is viewed (tgsis.write_revision) and the objects not locked by
 --   another version (TG303), or TG305 for unversioned storage outside
 --   DEFAULT's working revision; then the objects' write locks, exclusively
---   (tgsis.object_write_lock: no face writer of them in flight).
+--   (tgsis.object_write_lock: no face writer of them in flight). These last
+--   three steps are tgsis.object_write_prepare, shared with write_object_rows.
 -- The keys and rows go into a temporary table of tgsis's owner (42501 for one
 -- the session made under that name): the keys as rows with _delete true,
 -- the rows with _delete false. Keys not visible are skipped (as a DELETE
@@ -199,13 +200,7 @@ BEGIN
     END IF;
     v_keys := ARRAY(SELECT DISTINCT g FROM unnest(v_dgeo || v_igeo) AS g ORDER BY g)::text[];
     v_versioned := EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table);
-    IF v_versioned THEN
-        PERFORM tgsis.write_revision();  -- TG002, TG301 before any lock is taken
-        PERFORM tgsis.check_objects_unlocked(v_reg.objectclass, v_keys);
-    ELSE
-        PERFORM tgsis.plain_write_check('tgsis', p_table);  -- TG305
-    END IF;
-    PERFORM tgsis.object_write_lock(v_reg.objectclass, v_keys);
+    PERFORM tgsis.object_write_prepare(p_table, v_reg.objectclass, v_keys);  -- TG301, TG303 or TG305; the locks
 
     -- the keys and rows, in a temporary table of tgsis's owner (the writer reads it in several statements); a
     -- second one for the rows when a key comes back with other bits (below)

@@ -44,7 +44,10 @@
 -- Refused by name: a p_rows that is not a temporary table of the session (it is read
 -- by several statements: another session could change it in between), or
 -- without the row table's columns (of its types) or _delete, a
--- NULL key, value or _delete, a negative id, a key twice (TG100), a row
+-- NULL key, value (of a model table: it would be a hole) or _delete, a
+-- negative id, a key twice (TG100), a NULL key or a NULL in a NOT NULL
+-- property of a class's row to write (23502 naming the column, its table and
+-- schema, as the row table would: the first such column in column order), a row
 -- breaking a CHECK constraint of the row table (23514 naming the constraint,
 -- as the table would: a vector property's value not NULL nor k values without
 -- NULL breaks its column's CHECK, and the detail says what it must be). A
@@ -81,7 +84,8 @@ DECLARE
     v_reg      record;
     v_objclass text;      -- a model table's object class (tgsis.model_tables.objectclass); NULL for a class's table
     v_name     text;      -- the table as messages name it, schema-qualified
-    v_notnull  text[];    -- columns a NULL value may not be written into
+    v_notnull  text[];    -- columns a NULL value may not be written into (TG100: it would be a hole)
+    v_propnn   text[];    -- a class's keys and NOT NULL properties: a NULL is 23502, as the row table answers
     v_chunk    regclass;
     v_storage  regclass;
     v_size     bigint;
@@ -118,6 +122,8 @@ DECLARE
     v_total    bigint := 0;
     v_round    integer := 0;
     v_sql      text;
+    v_t        text;
+    v_rowrel   text;      -- the row table as the row storage's errors name it (<table>_ver when versioned)
 BEGIN
     v_chunk := tgsis.chunk_table_of(p_table);  -- TG200 / TG100
     SELECT * INTO v_reg FROM tgsis.chunk_registry(p_table) r;
@@ -128,6 +134,9 @@ BEGIN
     v_shift := round(log(2, v_reg.chunksize))::integer;
     v_cc := v_reg.chunkcolumn;
     v_keys := tgsis.chunk_key(p_table);
+    v_rowrel := v_reg.tablename || CASE WHEN EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = v_reg.schemaname
+                                                                                       AND t.tablename = v_reg.tablename)
+                                        THEN '_ver' ELSE '' END;
     -- the value arrays: coordinates (float), or a class's properties (value: NULL allowed, holes marks a hole)
     v_floats := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('float', 'value') ORDER BY c.colorder);
     v_refs := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'ref' ORDER BY c.colorder);
@@ -140,12 +149,21 @@ BEGIN
         v_uord := ' ORDER BY u.slot';
     END IF;
     SELECT c.name, c.role INTO v_first FROM tgsis.chunk_columns(p_table) c WHERE c.role IN ('value', 'vector') ORDER BY c.colorder LIMIT 1;
-    -- a NULL value would be a hole in a model table; in a class's table only its NOT NULL columns refuse it
+    -- a NULL value would be a hole in a model table; in a class's table only its NOT NULL columns refuse it, as the
+    -- row table does (23502)
     v_notnull := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c
                         WHERE c.role IN ('float', 'ref', 'point')
-                           OR (c.role IN ('value', 'vector') AND EXISTS (SELECT FROM pg_attribute a WHERE a.attrelid = v_storage
+                           OR (v_reg.classname IS NULL AND c.role IN ('value', 'vector')
+                               AND EXISTS (SELECT FROM pg_attribute a WHERE a.attrelid = v_storage
                                                                 AND a.attname = c.name AND a.attnotnull))
                         ORDER BY c.colorder);
+    v_propnn := ARRAY(SELECT c.name FROM tgsis.chunk_columns(p_table) c
+                       WHERE v_reg.classname IS NOT NULL
+                         AND (c.name = ANY (v_keys || v_cc)
+                              OR (c.role IN ('value', 'vector')
+                                  AND EXISTS (SELECT FROM pg_attribute a WHERE a.attrelid = v_storage
+                                                                           AND a.attname = c.name AND a.attnotnull)))
+                       ORDER BY c.colorder);
 
     -- p_rows: a temporary table of this session, read by several statements (checks, locks, the write), so that
     -- what was checked is what is written (a table other sessions write, or a view over one, changes in between)
@@ -182,24 +200,44 @@ BEGIN
     EXECUTE format(
         'SELECT CASE WHEN count(*) FILTER (WHERE %s) > 0 THEN %L
                      WHEN count(*) FILTER (WHERE NOT r._delete AND (%s)) > 0 THEN %L
+                     WHEN count(*) FILTER (WHERE NOT r._delete AND (%s)) > 0 THEN %L
                      WHEN count(*) FILTER (WHERE r.%I < 0%s) > 0 THEN %L
                      WHEN count(*) <> count(DISTINCT (%s, r.%I)) THEN %L END
            FROM %s r',
+        -- (a class's row to write with a NULL key: 23502 below, as the row table answers)
         concat_ws(' OR ', 'r._delete IS NULL',
-                  (SELECT string_agg(format('r.%I IS NULL', k), ' OR ') FROM unnest(v_keys || v_cc) AS k)),
+                  CASE WHEN v_reg.classname IS NOT NULL THEN 'r._delete AND (' ELSE '' END
+                  || (SELECT string_agg(format('r.%I IS NULL', k), ' OR ') FROM unnest(v_keys || v_cc) AS k)
+                  || CASE WHEN v_reg.classname IS NOT NULL THEN ')' ELSE '' END),
         'a key or _delete is NULL',
         coalesce((SELECT string_agg(format('r.%I IS NULL', v), ' OR ') FROM unnest(v_notnull) AS v), 'false'),
         'a row to write has a NULL value',
+        coalesce((SELECT string_agg(format('r.%I IS NULL', v), ' OR ') FROM unnest(v_propnn) AS v), 'false'),
+        '23502',
         v_cc, (SELECT string_agg(format(' OR (NOT r._delete AND r.%I < 0)', v), '') FROM unnest(v_refs) AS v),
         'a row has a negative id',
         array_to_string(ARRAY(SELECT format('r.%I', k) FROM unnest(v_keys) AS k), ', '), v_cc,
         'a key is given twice',
         p_rows) INTO v_problem;
+    IF v_problem = '23502' THEN
+        -- a NULL key or a NULL in a NOT NULL property of a class: the row table's answer (its message, the column, table and schema
+        -- in diag), the first such column in column order
+        FOREACH v_t IN ARRAY v_propnn LOOP
+            EXECUTE format('SELECT EXISTS (SELECT FROM %s r WHERE NOT r._delete AND r.%I IS NULL)', p_rows, v_t) INTO v_more;
+            IF v_more THEN
+                RAISE EXCEPTION 'null value in column "%" of relation "%" violates not-null constraint', v_t, v_rowrel
+                    USING ERRCODE = 'not_null_violation', COLUMN = v_t, TABLE = v_rowrel, SCHEMA = v_reg.schemaname,
+                          DETAIL = format('Column %I of %s is NOT NULL; written into %s by chunks, nothing was written.',
+                                          v_t, v_name, v_chunk),
+                          HINT = format('give %I a value in every row', v_t);
+            END IF;
+        END LOOP;
+    END IF;
     IF v_problem IS NOT NULL THEN
         RAISE EXCEPTION 'cannot write these rows into %: %', v_name, v_problem
             USING ERRCODE = 'TG100',
                   DETAIL = format('Ids are 0 or more, the columns of %s are NOT NULL (%s), and each key is written once by one call.',
-                                  v_name, coalesce(array_to_string(v_notnull, ', '), 'none')),
+                                  v_name, coalesce(array_to_string(v_notnull || v_propnn, ', '), 'none')),
                   HINT = 'give each key once, with all its values';
     END IF;
     -- the row table's CHECKs, in name order as PostgreSQL checks them: 23514 naming the row table and the constraint
@@ -213,15 +251,15 @@ BEGIN
                     AND con.conname <> v_reg.tablename || '_shape_holds_no_rows' ORDER BY con.conname LOOP
         EXECUTE format('SELECT EXISTS (SELECT FROM %s WHERE NOT _delete AND NOT (%s))', p_rows, v_con.expr) INTO v_more;
         IF v_more AND v_con.vector IS NOT NULL THEN
-            RAISE EXCEPTION 'new row for relation "%" violates check constraint "%"', v_reg.tablename, v_con.conname
-                USING ERRCODE = 'check_violation', CONSTRAINT = v_con.conname, TABLE = v_reg.tablename, SCHEMA = v_reg.schemaname,
+            RAISE EXCEPTION 'new row for relation "%" violates check constraint "%"', v_rowrel, v_con.conname
+                USING ERRCODE = 'check_violation', CONSTRAINT = v_con.conname, TABLE = v_rowrel, SCHEMA = v_reg.schemaname,
                       DETAIL = format('A value of vector property %I of %s is not NULL nor a one-dimensional array '
                                       'from 1 of exactly %s values without NULL; nothing was written.',
                                       v_con.vector, v_name, v_con.size),
                       HINT = 'give each vector property exactly its number of components, or NULL for no value';
         ELSIF v_more THEN
-            RAISE EXCEPTION 'new row for relation "%" violates check constraint "%"', v_reg.tablename, v_con.conname
-                USING ERRCODE = 'check_violation', CONSTRAINT = v_con.conname, TABLE = v_reg.tablename, SCHEMA = v_reg.schemaname,
+            RAISE EXCEPTION 'new row for relation "%" violates check constraint "%"', v_rowrel, v_con.conname
+                USING ERRCODE = 'check_violation', CONSTRAINT = v_con.conname, TABLE = v_rowrel, SCHEMA = v_reg.schemaname,
                       DETAIL = format('Written into %s by chunks; nothing was written.', v_chunk);
         END IF;
     END LOOP;

@@ -23,7 +23,8 @@
 -- versioned table go or change (TG300, as tgsis.close_object_rows asks on rows;
 -- an edit that only adds is written at any isolation level, as on rows). The object's write lock is taken
 -- exclusively (tgsis.object_write_lock: no write through the face is in
--- flight on it), and the object is noted as changed in the working revision
+-- flight on it; the version's checks and the lock are
+-- tgsis.object_write_prepare, shared with chunk_rows_write), and the object is noted as changed in the working revision
 -- when a chunk was written (tgsis.record_changed_objects; never for revision
 -- 0). The rows go through a temporary table this function makes (owned by
 -- tgsis's owner: one the session made itself under that name is refused,
@@ -142,12 +143,8 @@ BEGIN
                 PERFORM tgsis.require_read_committed('a set-based delete of versioned objects');
             END IF;
         END IF;
-        PERFORM tgsis.write_revision();  -- TG002, TG301 before any lock is taken
-        PERFORM tgsis.check_objects_unlocked(v_reg.objectclass, v_keys);
-    ELSE
-        PERFORM tgsis.plain_write_check('tgsis', p_table);  -- TG305
     END IF;
-    PERFORM tgsis.object_write_lock(v_reg.objectclass, v_keys);
+    PERFORM tgsis.object_write_prepare(p_table, v_reg.objectclass, v_keys);  -- TG301, TG303 or TG305; the locks
 
     -- the rows, in a temporary table of tgsis's owner (the writer reads it in several statements)
     v_tab := format('pg_temp.%I', 'tgsis_object_rows_' || p_table);

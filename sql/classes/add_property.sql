@@ -48,6 +48,10 @@ DECLARE
     v_check    text := '';  -- a vector's CHECK named as on the row storage when the table is in chunks (below)
     v_n1       text;
     v_n2       text;
+    v_b1       integer;   -- their lengths in bytes, as PostgreSQL shortens them
+    v_b2       integer;
+    v_label    text;
+    v_pass     integer;
 BEGIN
     IF p_kind IS NULL OR p_kind NOT IN ('feature', 'cell', 'instant') THEN
         RAISE EXCEPTION 'property kind % must be feature, cell or instant', coalesce(quote_literal(p_kind), 'NULL')
@@ -157,20 +161,39 @@ BEGIN
     -- a vector's CHECK: on a table in chunks it is added to <table>_shape, where PostgreSQL would name it
     -- <table>_shape_<column>_check; it gets the name the row storage (<table>, or <table>_ver when versioned) would
     -- give it, so that the writers of chunks name the same constraint as rows do (23514: tgsis.write_chunk_rows).
-    -- PostgreSQL's rule (makeObjectName): both names shortened, the longer first, to 56 bytes together
+    -- PostgreSQL's rule (ChooseConstraintName, makeObjectName): the label "check", then "check1", "check2"... while
+    -- a constraint of the schema holds the name (the shape keeps the row table's constraint names, so a name the
+    -- rows would find taken is taken here too: a renamed vector's CHECK keeps its old name); both names shortened
+    -- in bytes, the longer first, to 63 bytes with the label and the underscores, each then cut back to a whole
+    -- character (pg_mbcliplen: a non-ASCII name at the limit)
     IF v_prop.size > 1 AND tgsis.stored_in_chunks(v_class.schemaname, v_table) THEN
-        v_n1 := v_table || CASE WHEN EXISTS (SELECT FROM tgsis.versioned_tables t
-                                              WHERE t.schemaname = v_class.schemaname AND t.tablename = v_table)
-                                THEN '_ver' ELSE '' END;
-        v_n2 := v_prop.name;
-        WHILE octet_length(v_n1) + octet_length(v_n2) > 56 LOOP
-            IF octet_length(v_n1) > octet_length(v_n2) THEN
+        v_pass := 0;
+        LOOP
+            v_label := 'check' || CASE WHEN v_pass > 0 THEN v_pass::text ELSE '' END;
+            v_n1 := v_table || CASE WHEN EXISTS (SELECT FROM tgsis.versioned_tables t
+                                                  WHERE t.schemaname = v_class.schemaname AND t.tablename = v_table)
+                                    THEN '_ver' ELSE '' END;
+            v_n2 := v_prop.name;
+            v_b1 := octet_length(v_n1);
+            v_b2 := octet_length(v_n2);
+            WHILE v_b1 + v_b2 > 63 - 2 - octet_length(v_label) LOOP
+                IF v_b1 > v_b2 THEN
+                    v_b1 := v_b1 - 1;
+                ELSE
+                    v_b2 := v_b2 - 1;
+                END IF;
+            END LOOP;
+            WHILE octet_length(v_n1) > v_b1 LOOP
                 v_n1 := left(v_n1, -1);
-            ELSE
+            END LOOP;
+            WHILE octet_length(v_n2) > v_b2 LOOP
                 v_n2 := left(v_n2, -1);
-            END IF;
+            END LOOP;
+            EXIT WHEN NOT EXISTS (SELECT FROM pg_constraint con JOIN pg_namespace n ON n.oid = con.connamespace
+                                   WHERE n.nspname = v_class.schemaname AND con.conname = v_n1 || '_' || v_n2 || '_' || v_label);
+            v_pass := v_pass + 1;
         END LOOP;
-        v_check := format(' CONSTRAINT %I', v_n1 || '_' || v_n2 || '_check');
+        v_check := format(' CONSTRAINT %I', v_n1 || '_' || v_n2 || '_' || v_label);
     END IF;
     -- the rows stored get the default; new rows give their values, as in a class registered with the property
     PERFORM tgsis.alter_class_table(v_class, v_table, ARRAY[
