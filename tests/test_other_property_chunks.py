@@ -440,3 +440,41 @@ def test_a_table_without_a_property_column_stays_rows(conn: Conn) -> None:
     conn.execute("SELECT tgsis.store_class_in_rows('tops')")
     conn.commit()
     assert _kinds(conn, "tops") == ("r", False, "r", False)
+
+
+def _user_indexes(conn: Conn, name: str) -> list[tuple[str, str]]:
+    """The indexes of both property tables' row storage (the table, or its _ver), by name and definition."""
+    return conn.execute(
+        "SELECT c.relname::text, pg_get_indexdef(i.indexrelid) FROM pg_index i JOIN pg_class c ON c.oid = i.indexrelid"
+        " WHERE i.indrelid IN (to_regclass(tgsis.storage_table('public', %s)), to_regclass(tgsis.storage_table('public', %s)))"
+        " ORDER BY 1",
+        (f"{name}_cellpros", f"{name}_simplexpros"),
+    ).fetchall()
+
+
+@pytest.mark.parametrize("versioned", [False, True])
+def test_the_tables_own_indexes_come_back_by_name(conn: Conn, versioned: bool) -> None:
+    """A user's indexes on the property tables are kept by the switch and made again on the way back, as they were."""
+    _class(conn, "indexed")
+    F.insert_feature(conn, "indexed", _surface(5))
+    if versioned:
+        tgsis.enable_feature_versioning(conn)
+    for index, definition in (("indexed_grade_idx", "(grade)"), ("indexed_facies_idx", "(facies) WHERE facies > 0")):
+        conn.execute(
+            sql.SQL("CREATE INDEX {} ON {} ").format(
+                sql.Identifier(index),
+                sql.SQL(
+                    conn.execute("SELECT tgsis.storage_table('public', 'indexed_simplexpros')").fetchone()[0]  # type: ignore[index]
+                ),
+            )
+            + sql.SQL(definition)
+        )
+    conn.commit()
+    before = _user_indexes(conn, "indexed")
+    assert {"indexed_grade_idx", "indexed_facies_idx"} <= {name for name, _ in before}
+    conn.execute("SELECT tgsis.store_class_in_chunks('indexed')")
+    conn.commit()
+    assert _kinds(conn, "indexed")[3]  # the other table in chunks: its row storage gone, the indexes kept aside
+    conn.execute("SELECT tgsis.store_class_in_rows('indexed')")
+    conn.commit()
+    assert _user_indexes(conn, "indexed") == before

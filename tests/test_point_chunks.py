@@ -110,6 +110,10 @@ def test_the_switch_and_back_keep_every_point_bit_for_bit(conn: Conn, versioned:
     before = _everywhere(conn, g4, g5, versions)
     if versioned:
         assert before["e1"][1] != before["DEFAULT"][1]
+    indexes = _indexes(conn)
+    assert ("md_vertex_point_idx", "CREATE INDEX md_vertex_point_idx ON tgsis.{} USING gist (cube(coordinate))") in {
+        (name, definition.replace("md_vertex_ver ", "{} ").replace("md_vertex ", "{} ")) for name, definition in indexes
+    }, indexes
     _switch(conn, "chunks")
     assert conn.execute(
         "SELECT bool_and(tgsis.stored_in_chunks(t)) FROM unnest(%s::text[]) t", (list(POINTS),)
@@ -135,6 +139,18 @@ def test_the_switch_and_back_keep_every_point_bit_for_bit(conn: Conn, versioned:
     _same(_everywhere(conn, g4, g5, versions), before)
     _switch(conn, "rows")
     _same(_everywhere(conn, g4, g5, versions), before)
+    # the row tables' own indexes (model 5's per-point GiST index) made again by name, as they were
+    assert _indexes(conn) == indexes
+
+
+def _indexes(conn: Conn) -> list[tuple[str, str]]:
+    """Every index of the G-map point tables' row storage (versioned or not): name and definition."""
+    return conn.execute(
+        "SELECT c.relname::text, pg_get_indexdef(i.indexrelid) FROM pg_index i JOIN pg_class c ON c.oid = i.indexrelid"
+        " WHERE i.indrelid = ANY (ARRAY(SELECT tgsis.storage_table('tgsis', t)::regclass FROM unnest(%s::text[]) t))"
+        " ORDER BY 1",
+        (list(POINTS),),
+    ).fetchall()
 
 
 STATEMENTS = (

@@ -156,6 +156,8 @@ BEGIN
             EXECUTE format('DROP FUNCTION %s', v_name);
         END LOOP;
     END IF;
+    -- the row table's own secondary indexes kept on the row definition, by name (the way back makes them again)
+    PERFORM tgsis.move_row_indexes(v_storage, format('tgsis.%I', v_shape)::regclass);
     EXECUTE format('DROP TABLE %s', v_storage);
     EXECUTE format('ALTER VIEW tgsis.%I RENAME TO %I', p_table || '_face', p_table);
     IF v_versioned.tablename IS NOT NULL THEN

@@ -73,6 +73,7 @@ BEGIN
         EXECUTE format('ALTER TABLE tgsis.%I ADD CONSTRAINT %I %s', p_table,
                        coalesce(v_versioned.pkeyname, p_table || '_pkey'), v_c.def);
     END LOOP;
+    PERFORM tgsis.move_row_indexes(v_shape, format('tgsis.%I', p_table)::regclass);  -- the row table's own indexes, by name
     EXECUTE format('COMMENT ON TABLE tgsis.%I IS %L', p_table, v_comment);
     PERFORM tgsis.copy_relation_rights(v_face, format('tgsis.%I', p_table)::regclass);  -- the face's grants, grant options kept
     -- the shape is the marker of chunk storage (tgsis.stored_in_chunks): once it goes, tgsis.storage_table names the rows

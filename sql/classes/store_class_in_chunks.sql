@@ -190,6 +190,8 @@ BEGIN
                 EXECUTE format('DROP FUNCTION %s', v_proc);
             END LOOP;
         END IF;
+        -- the row table's own secondary indexes kept on the row definition, by name (the way back makes them again)
+        PERFORM tgsis.move_row_indexes(v_storage, format('%I.%I', v_class.schemaname, v_shape)::regclass);
         EXECUTE format('DROP TABLE %s', v_storage);
         EXECUTE format('ALTER VIEW %I.%I RENAME TO %I', v_class.schemaname, v_tab || '_face', v_tab);
         IF v_versioned.tablename IS NOT NULL THEN

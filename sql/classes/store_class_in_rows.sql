@@ -77,6 +77,7 @@ BEGIN
                     WHERE con.conrelid = v_shape AND con.contype = 'p' LOOP
             EXECUTE format('ALTER TABLE %s ADD CONSTRAINT %I %s', v_name, coalesce(v_versioned.pkeyname, v_tab || '_pkey'), v_c.def);
         END LOOP;
+        PERFORM tgsis.move_row_indexes(v_shape, v_name::regclass);  -- the row table's own indexes, by name
         EXECUTE format('COMMENT ON TABLE %s IS %L', v_name,
                        CASE WHEN v_versioned.tablename IS NOT NULL THEN v_versioned.tablecomment  -- the table's own, before versioning
                             ELSE split_part(obj_description(v_face, 'pg_class'), ', stored in chunks (', 1) END);
