@@ -5,8 +5,9 @@
 -- it (tgsis.store_in_rows, tgsis.store_class_in_rows); without this, the way back made the key alone and a
 -- box query read every point by a sequential scan (same answers, slower, nothing said).
 -- Moved: every index that is not the key and backs no constraint (a key or unique constraint is part of the
--- definition, copied as such). Left: the versioning's own indexes (on revision, lastrevs or revclosed,
--- tgsis.create_revision_indexes and tgsis.enable_versioning_rel make them again with the versioning). An
+-- definition, copied as such). Left: the versioning's own indexes (on revision, lastrevs or revclosed, and the
+-- block index of a versioned simplex table on geoid and its vertex ids: tgsis.create_revision_indexes and
+-- tgsis.enable_versioning_rel make them again with the versioning). An
 -- empty shape keeps the index cheaply; the names stay those of the install (pg_dump/restore compares them).
 CREATE FUNCTION tgsis.move_row_indexes(p_from regclass, p_to regclass)
 RETURNS integer
@@ -31,6 +32,14 @@ BEGIN
                             WHERE d.classid = 'pg_class'::regclass AND d.objid = i.indexrelid
                               AND d.refclassid = 'pg_class'::regclass AND d.refobjid = p_from AND d.refobjsubid > 0
                               AND a.attname IN ('revision', 'lastrevs', 'revclosed'))
+           -- the versioning's block index of a versioned simplex table (tgsis.create_revision_indexes: brin on geoid,
+           -- the vertex or node ids and the instant or period), made again with the versioning, never kept aside
+           AND NOT (EXISTS (SELECT FROM pg_attribute a WHERE a.attrelid = p_from AND a.attname = 'revision' AND NOT a.attisdropped)
+                    AND (SELECT m.amname FROM pg_am m WHERE m.oid = c.relam) = 'brin'
+                    AND NOT EXISTS (SELECT FROM unnest(i.indkey::int2[]) AS k(n)
+                                      LEFT JOIN pg_attribute a ON a.attrelid = p_from AND a.attnum = k.n
+                                     WHERE a.attname IS NULL
+                                        OR NOT (a.attname IN ('geoid', 'times', 'timem') OR a.attname ~ '^(vrtxid|nodeid)[0-9]+$')))
          ORDER BY c.relname
     LOOP
         -- the definition's table, as pg_get_indexdef writes it (schema-qualified; ON ONLY for a partitioned one)
@@ -57,4 +66,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.move_row_indexes(regclass, regclass) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.move_row_indexes(regclass, regclass) IS
-    'move the secondary indexes of a row table (not its key, no constraint''s, not the versioning''s on revision, lastrevs or revclosed) to another relation of the same columns, by name and definition, as the storage switches keep them on the row definition tgsis.<table>_shape and make them again on the way back; returns the indexes moved; TG000 when a definition does not name the table as expected';
+    'move the secondary indexes of a row table (not its key, no constraint''s, not the versioning''s: on revision, lastrevs or revclosed, or a versioned simplex table''s brin on geoid and its vertex ids) to another relation of the same columns, by name and definition, as the storage switches keep them on the row definition tgsis.<table>_shape and make them again on the way back; returns the indexes moved; TG000 when a definition does not name the table as expected';
