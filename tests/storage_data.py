@@ -13,6 +13,8 @@ from typing import Any
 
 import psycopg
 
+from tgsis.errors import translate
+
 Conn = psycopg.Connection[Any]
 
 
@@ -45,3 +47,27 @@ def row_versions(conn: Conn, table: str, schema: str = "tgsis") -> str:
     row = conn.execute("SELECT tgsis.storage_row_versions(%s, %s)", (schema, table)).fetchone()
     assert row is not None
     return str(row[0])
+
+
+def answer(conn: Conn, statement: str, name: str) -> tuple[Any, ...]:
+    """What ``statement`` answers, to compare a class in chunks with its rows twin: SQLSTATE, message, constraint,
+    column, table, schema and the user's exception class (``tgsis.errors.translate``), the class's ``name``
+    replaced by ``X``; ``("written",)`` when it succeeds (in a savepoint, rolled back on error)."""
+    try:
+        with conn.transaction():
+            conn.execute(statement)
+    except psycopg.Error as exc:
+        diag = exc.diag
+        return tuple(
+            None if v is None else str(v).replace(name, "X")
+            for v in (
+                exc.sqlstate,
+                diag.message_primary,
+                diag.constraint_name,
+                diag.column_name,
+                diag.table_name,
+                diag.schema_name,
+                type(translate(exc)).__name__,
+            )
+        )
+    return ("written",)

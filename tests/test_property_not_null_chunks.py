@@ -17,7 +17,7 @@ import psycopg
 import pytest
 
 import tgsis
-from tgsis.errors import translate
+from tests.storage_data import answer
 
 Conn = psycopg.Connection[Any]
 
@@ -69,29 +69,6 @@ def _twins(conn: Conn, geometry: str = "SURFACE", versioned: bool = False) -> No
     conn.commit()
 
 
-def _answer(conn: Conn, statement: str, name: str) -> tuple[Any, ...]:
-    """What ``statement`` answers: SQLSTATE, message, constraint, column, table, schema and the user's exception
-    class, the class's name replaced by ``X``."""
-    try:
-        with conn.transaction():
-            conn.execute(statement)
-    except psycopg.Error as exc:
-        diag = exc.diag
-        return tuple(
-            None if v is None else str(v).replace(name, "X")
-            for v in (
-                exc.sqlstate,
-                diag.message_primary,
-                diag.constraint_name,
-                diag.column_name,
-                diag.table_name,
-                diag.schema_name,
-                type(translate(exc)).__name__,
-            )
-        )
-    return ("written",)
-
-
 @pytest.mark.parametrize("versioned", [False, True], ids=["unversioned", "versioned"])
 def test_a_null_in_a_not_null_property_answers_as_the_row_table(conn: Conn, versioned: bool) -> None:
     _twins(conn, versioned=versioned)
@@ -101,22 +78,22 @@ def test_a_null_in_a_not_null_property_answers_as_the_row_table(conn: Conn, vers
     chunk_rows = conn.execute(chunks).fetchall()
     named = set()
     for statement in BAD + NULL_KEYS:
-        rows = _answer(conn, statement.format(t="public.onrows_cellpros"), "onrows")
-        in_chunks = _answer(conn, statement.format(t="public.inchunks_cellpros"), "inchunks")
+        rows = answer(conn, statement.format(t="public.onrows_cellpros"), "onrows")
+        in_chunks = answer(conn, statement.format(t="public.inchunks_cellpros"), "inchunks")
         assert rows[0] == "23502", rows
         assert in_chunks == rows, statement
         named.add(rows[3])
     assert named == {"normal", "porosity", "_geoid", "_idx"}
     # a wrong vector (V2's 23514) names the same relation too, versioned or not
     check = "UPDATE {t} SET normal = ARRAY[1, 2] WHERE _geoid = 1 AND _idx = 3"
-    rows = _answer(conn, check.format(t="public.onrows_cellpros"), "onrows")
-    assert rows[0] == "23514" and _answer(conn, check.format(t="public.inchunks_cellpros"), "inchunks") == rows
+    rows = answer(conn, check.format(t="public.onrows_cellpros"), "onrows")
+    assert rows[0] == "23514" and answer(conn, check.format(t="public.inchunks_cellpros"), "inchunks") == rows
     # tgsis.write_property_rows, the edit path of the Python API: the same answer
     call = (
         "SELECT tgsis.write_property_rows('public.inchunks_cellpros', 1, '{3}'::bigint[], "
         "ARRAY[ROW(1, 3, NULL, 1, 1)::public.inchunks_cellpros])"
     )
-    assert _answer(conn, call, "inchunks") == _answer(conn, BAD[0].format(t="public.onrows_cellpros"), "onrows")
+    assert answer(conn, call, "inchunks") == answer(conn, BAD[0].format(t="public.onrows_cellpros"), "onrows")
     # nothing written anywhere
     assert _rows(conn, "public.inchunks_cellpros") == before == _rows(conn, "public.onrows_cellpros")
     assert conn.execute(chunks).fetchall() == chunk_rows
@@ -126,8 +103,8 @@ def test_a_collection_s_properties_take_a_null_on_both_storages(conn: Conn) -> N
     _twins(conn, "GEOMETRYCOLLECTION")
     for statement in BAD:
         for name in ("onrows", "inchunks"):
-            assert _answer(conn, statement.format(t=f"public.{name}_cellpros"), name) == ("written",), statement
+            assert answer(conn, statement.format(t=f"public.{name}_cellpros"), name) == ("written",), statement
     for statement in NULL_KEYS:
-        rows = _answer(conn, statement.format(t="public.onrows_cellpros"), "onrows")
-        assert rows[0] == "23502" and _answer(conn, statement.format(t="public.inchunks_cellpros"), "inchunks") == rows
+        rows = answer(conn, statement.format(t="public.onrows_cellpros"), "onrows")
+        assert rows[0] == "23502" and answer(conn, statement.format(t="public.inchunks_cellpros"), "inchunks") == rows
     assert _rows(conn, "public.inchunks_cellpros") == _rows(conn, "public.onrows_cellpros")

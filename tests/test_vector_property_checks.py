@@ -22,8 +22,8 @@ import pytest
 
 import tgsis
 from tests.merge_data import curved_surface
+from tests.storage_data import answer
 from tgsis.db import features as F
-from tgsis.errors import translate
 from tgsis.mesh import Surface
 
 Conn = psycopg.Connection[Any]
@@ -64,28 +64,6 @@ def _twins(conn: Conn) -> None:
     conn.commit()
 
 
-def _answer(conn: Conn, statement: str, name: str) -> tuple[Any, ...]:
-    """What ``statement`` answers: SQLSTATE, message, constraint, table, schema and the user's exception class,
-    the class's name replaced by ``X``."""
-    try:
-        with conn.transaction():
-            conn.execute(statement)
-    except psycopg.Error as exc:
-        diag = exc.diag
-        return tuple(
-            None if v is None else str(v).replace(name, "X")
-            for v in (
-                exc.sqlstate,
-                diag.message_primary,
-                diag.constraint_name,
-                diag.table_name,
-                diag.schema_name,
-                type(translate(exc)).__name__,
-            )
-        )
-    return ("written",)
-
-
 def test_a_wrong_vector_answers_as_the_row_table_s_check(conn: Conn) -> None:
     _twins(conn)
     before = _rows(conn, "public.inchunks_cellpros")
@@ -93,8 +71,8 @@ def test_a_wrong_vector_answers_as_the_row_table_s_check(conn: Conn) -> None:
     chunks = "SELECT array_send(normal), array_send(pair) FROM public.inchunks_cellpros_chunk ORDER BY chunk"
     chunk_bits = conn.execute(chunks).fetchall()
     for statement in BAD:
-        rows = _answer(conn, statement.format(t="public.onrows_cellpros"), "onrows")
-        in_chunks = _answer(conn, statement.format(t="public.inchunks_cellpros"), "inchunks")
+        rows = answer(conn, statement.format(t="public.onrows_cellpros"), "onrows")
+        in_chunks = answer(conn, statement.format(t="public.inchunks_cellpros"), "inchunks")
         assert rows[0] == "23514" and rows[2] in ("X_cellpros_normal_check", "X_cellpros_pair_check"), rows
         assert in_chunks == rows, statement
     # the detail of the chunks' answer names the property and its size
@@ -108,7 +86,7 @@ def test_a_wrong_vector_answers_as_the_row_table_s_check(conn: Conn) -> None:
         "SELECT tgsis.write_property_rows('public.inchunks_cellpros', 1, '{3}'::bigint[], "
         "ARRAY[ROW(1, 3, ARRAY[1, 2]::float8[], 1, ARRAY[1, 2])::public.inchunks_cellpros])"
     )
-    assert _answer(conn, call, "inchunks") == _answer(conn, BAD[0].format(t="public.onrows_cellpros"), "onrows")
+    assert answer(conn, call, "inchunks") == answer(conn, BAD[0].format(t="public.onrows_cellpros"), "onrows")
     # nothing written anywhere
     assert _rows(conn, "public.inchunks_cellpros") == before == _rows(conn, "public.onrows_cellpros")
     assert conn.execute(chunks).fetchall() == chunk_bits
