@@ -335,7 +335,7 @@ def test_temporal_and_gmap_classes_without_versioning(conn: Conn) -> None:
     revisions = conn.execute(
         "SELECT array_agg(DISTINCT revision) FROM (SELECT revision FROM tgsis.times_ver WHERE geoid = %(s)s "
         "UNION ALL SELECT revision FROM tgsis.timem_ver WHERE geoid = %(m)s "
-        "UNION ALL SELECT revision FROM tgsis.d4dvrtx_ver WHERE geoid = %(m)s "
+        f"UNION ALL SELECT revision FROM {row_versions(conn, 'd4dvrtx')} v WHERE geoid = %(m)s "
         "UNION ALL SELECT revision FROM tgsis.gmap_ver WHERE geoid = %(b)s "
         "UNION ALL SELECT revision FROM tgsis.geometry_ver WHERE geoid IN (%(s)s, %(m)s, %(b)s)) r",
         {"s": stepped, "m": moving, "b": block},
