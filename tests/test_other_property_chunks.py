@@ -306,6 +306,29 @@ def test_a_refusal_on_the_other_table_moves_nothing(conn: Conn) -> None:
     assert _kinds(conn, "tops") == ("r", False, "r", False)
 
 
+def test_a_users_function_of_the_face_row_name_is_refused_and_kept(conn: Conn) -> None:
+    """A user's ``<table>_face_row()`` in the class's schema is not taken over by the face's generated row function:
+    TG201 naming it, nothing moved, the user's function unchanged."""
+    _class(conn, "tops")
+    F.insert_feature(conn, "tops", _surface(5))
+    body = "BEGIN RETURN NULL; END"
+    conn.execute(
+        "CREATE FUNCTION public.tops_simplexpros_face_row() RETURNS trigger LANGUAGE plpgsql AS $$" + body + "$$"
+    )
+    conn.commit()
+    state, message = sqlstate(conn, "SELECT tgsis.store_class_in_chunks('tops')")
+    assert state == "TG201" and "tops_simplexpros_face_row" in message, message
+    assert _kinds(conn, "tops") == ("r", False, "r", False)
+    assert conn.execute(
+        "SELECT prosrc FROM pg_proc WHERE oid = 'public.tops_simplexpros_face_row()'::regprocedure"
+    ).fetchone() == (body,)
+    conn.execute("DROP FUNCTION public.tops_simplexpros_face_row()")
+    conn.commit()
+    conn.execute("SELECT tgsis.store_class_in_chunks('tops')")  # the name free: the switch goes through
+    conn.commit()
+    assert _kinds(conn, "tops") == ("v", True, "v", True)
+
+
 def test_a_role_without_rights_is_refused_and_an_editor_writes_both_faces(db_dsn: str, conn: Conn) -> None:
     _class(conn, "tops")
     geoid = F.insert_feature(conn, "tops", _surface(6))

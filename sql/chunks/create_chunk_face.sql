@@ -28,7 +28,7 @@
 -- snapshot older than the chunk table's file, which it would read empty).
 -- p_view names the view (default: the table's own name, what the storage
 -- switch will use; the tests build the face beside today's live table).
--- Not idempotent: TG201 when the view exists. Runs with the caller's rights
+-- Not idempotent: TG201 when the view exists (or a user's function <table>_face_row() does). Runs with the caller's rights
 -- (tgsis's owner, who owns the storage).
 CREATE FUNCTION tgsis.create_chunk_face(p_table text, p_view text DEFAULT NULL)
 RETURNS regclass
@@ -63,6 +63,19 @@ BEGIN
     IF to_regclass(format('%I.%I', v_reg.schemaname, v_view)) IS NOT NULL THEN
         RAISE EXCEPTION '% exists already', format('%I.%I', v_reg.schemaname, v_view)
             USING ERRCODE = 'TG201', DETAIL = 'The face of a chunk table takes a name no relation has.';
+    END IF;
+    -- the face's row function takes <table>_face_row: a function of that name must be an earlier face's of this
+    -- table (its owner the chunk table's, its comment ours: made again), never a user's (CREATE OR REPLACE would
+    -- put the face's body in a user's function, or fail on one of another owner)
+    IF EXISTS (SELECT FROM pg_proc p
+                WHERE p.pronamespace = v_reg.schemaname::regnamespace AND p.proname = v_reg.tablename || '_face_row'
+                  AND p.pronargs = 0
+                  AND (p.proowner <> (SELECT c.relowner FROM pg_class c WHERE c.oid = v_chunk)
+                       OR coalesce(obj_description(p.oid, 'pg_proc'), '') NOT LIKE 'row-level INSTEAD OF trigger of the face of %')) THEN
+        RAISE EXCEPTION 'the function %.% exists already', quote_ident(v_reg.schemaname), quote_ident(v_reg.tablename || '_face_row')
+            USING ERRCODE = 'TG201',
+                  DETAIL = 'The face of a chunk table takes <table>_face_row for its row trigger function; this one is not a face''s.',
+                  HINT = 'rename or drop that function, then store the table in chunks again';
     END IF;
     v_storage := tgsis.row_shape(p_table);  -- the row definition (comments), before or after the switch
     v_today := to_regclass(format('%I.%I', v_reg.schemaname, v_reg.tablename));
@@ -195,4 +208,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.create_chunk_face(text, text) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.create_chunk_face(text, text) IS
-    'create the view tgsis.<p_view or p_table> over the visible chunk versions of tgsis.<table>_chunk with exactly the row table''s columns (today''s visibility when versioned, the class rights filter, security_barrier, the grants of today''s relation), written through INSTEAD OF triggers (each row kept by the face''s generated row function <table>_face_row, static SQL, in tables tgsis.chunk_face_queue makes before the statement, written per statement by tgsis.chunk_face_write); TG200 without a chunk table, TG201 when the view exists';
+    'create the view tgsis.<p_view or p_table> over the visible chunk versions of tgsis.<table>_chunk with exactly the row table''s columns (today''s visibility when versioned, the class rights filter, security_barrier, the grants of today''s relation), written through INSTEAD OF triggers (each row kept by the face''s generated row function <table>_face_row, static SQL, in tables tgsis.chunk_face_queue makes before the statement, written per statement by tgsis.chunk_face_write); TG200 without a chunk table, TG201 when the view exists or a function <table>_face_row() is not an earlier face''s';
