@@ -63,8 +63,9 @@ BEGIN
                 p_class.classname, cardinality(p_geoids), p_table
             USING ERRCODE = 'TG103',
                   DETAIL = 'Rows made for every version are written into row versions; a versioned table in chunks has none.',
-                  HINT = format('store the class as rows (SELECT tgsis.store_class_in_rows(%L)), make the rows, then store it in chunks again',
-                                p_class.classname);
+                  HINT = format('store the class as rows, make the rows, then store it in chunks again (in psql: '
+                                'SELECT tgsis.store_class_in_rows(%L), then tgsis.store_class_in_chunks(%L))',
+                                p_class.classname, p_class.classname);
     END IF;
     v_sources := CASE WHEN v_align = 'VERTEX' THEN ARRAY['vrtx']
                       WHEN p_class.geotype = 'GEOMETRYCOLLECTION' THEN ARRAY['point', 'segment', 'trgl', 'tetra']
