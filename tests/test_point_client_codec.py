@@ -27,7 +27,7 @@ from tgsis.db import _chunk_transfer, _transfer, multidim
 from tgsis.db import features as F
 from tgsis.db import gmaps as G
 from tgsis.db._gmap_common import copy_rows
-from tgsis.errors import InvalidInputError
+from tgsis.errors import DatabaseError, InvalidInputError
 
 Conn = psycopg.Connection[Any]
 
@@ -215,7 +215,7 @@ def test_odd_bits_and_holes_bit_for_bit_both_ways(conn: Conn, table: str, versio
         assert _decoded(conn, table, 901, m) == _face(conn, table, 901, m) == _face(conn, table, 902, m)
         conn.rollback()
     # an embedding other than the chunks' is refused by name
-    with pytest.raises(InvalidInputError, match="901 have \\[.\\] coordinates, not its embedding's 2"):
+    with pytest.raises(DatabaseError, match="901 have \\[.\\] coordinates, not its embedding's 2"):
         _chunk_transfer.point_rows(conn, table, 901, 2)
     conn.rollback()
 

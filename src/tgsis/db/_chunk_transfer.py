@@ -1202,7 +1202,9 @@ def point_rows(
     Raises
     ------
     InvalidInputError
-        Chunks that break the contract, or points of another length than m.
+        Chunks that break the contract.
+    DatabaseError
+        Points of another length than m.
     """
     if table not in (chunked if chunked is not None else chunked_tables(conn)):
         return None
@@ -1215,8 +1217,8 @@ def point_rows(
     else:
         groups = [((geoid,), _objects(layout, [geoid], _copy_out(conn, chunk_copy_query(layout, [geoid])))[geoid])]
     sizes = {int(o.columns[point].shape[1]) for _, o in groups if len(o.ids)}
-    if sizes - {m}:
-        raise InvalidInputError(
+    if sizes - {m}:  # (as the face's read refuses them: a value of another size)
+        raise DatabaseError(
             f"tgsis.{table}: the points of object {geoid} have {sorted(sizes)} coordinates, not its embedding's {m}"
         )
     counts = [len(o.ids) for _, o in groups]
