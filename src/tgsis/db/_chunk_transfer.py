@@ -1006,10 +1006,10 @@ def write_instants(
 
 
 def upload_rows(conn: Conn, table: str, columns: Sequence[tuple[str, npt.ArrayLike, str]], storage: Storage) -> bool:
-    """Write a new G-map's darts or involutions as chunk rows encoded here: one binary COPY (issue 40, plan K G2).
+    """Write a new G-map's darts, involutions or points as chunk rows encoded here: one binary COPY (plan K G2; M, Q).
 
-    The upload of ``insert_gmap`` / ``insert_md_gmap`` into ``gmap_dart``, ``md_dart``, ``gmap_alpha`` or
-    ``md_alpha`` stored in chunks (:meth:`Storage.copy_all`), as model 1's :func:`upload_chunks` and models 2
+    The upload of ``insert_gmap`` / ``insert_md_gmap`` into ``gmap_dart``, ``md_dart``, ``gmap_alpha``,
+    ``md_alpha``, ``gmap_vertex`` or ``md_vertex`` stored in chunks (:meth:`Storage.copy_all`), as model 1's :func:`upload_chunks` and models 2
     and 3's :func:`upload_instants`: the rows are grouped by their keys before ``chunk`` (``geoid``, and
     ``level`` for the involutions), each group's chunks encoded by numpy (:func:`~tgsis._chunks.encode`: the
     point or image a ref column relative to the chunk's smallest, ``acellid`` and ``positive`` arrays that may
