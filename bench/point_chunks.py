@@ -10,7 +10,19 @@ the chunk table's size, and a full scan of the object through the face against
 the row table's (best of ``--repeat``, ratio in the same run). The face's rows
 are checked equal to the rows' by ``array_send`` (bit for bit). Unversioned.
 
-    python bench/point_chunks.py [--side 1000 --repeat 3]    # TGSIS_PG=system|embedded
+With ``--transfer`` (plan M, Q) it measures the client codec instead: the
+points of one model-5 object of ``--side``^2 points in R^3 (odd bits among them)
+uploaded into ``md_vertex`` stored in chunks by the client's encoder
+(``tgsis.db._chunk_transfer.upload_rows``: one binary COPY of chunks) against
+the server's path (``tgsis.insert_chunk_rows``, what the upload did before),
+and downloaded by the client's decoder (``point_rows``) against the face's
+read (``copy_rows`` of ``tgsis.md_vertex``, what ``fetch_md_gmap`` did before);
+each a fresh object, paths alternated, best of ``--repeat``, ratios in the same
+run; the chunk rows of both uploads and the points of both downloads checked
+equal, bit for bit. The points' table alone: the darts and involutions had their
+client codec already (docs/performance.md, "G-maps in chunks").
+
+    python bench/point_chunks.py [--side 1000 --repeat 3] [--transfer]    # TGSIS_PG=system|embedded
 """
 
 from __future__ import annotations
@@ -18,14 +30,22 @@ from __future__ import annotations
 import argparse
 import time
 
+import numpy as np
 from timing import bench_database
+
+from tgsis.db import _chunk_transfer, _transfer
+from tgsis.db._gmap_common import copy_rows
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--side", type=int, default=1000)
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--transfer", action="store_true", help="the client codec against the server's path")
     args = parser.parse_args()
+    if args.transfer:
+        transfer(args.side, args.repeat)
+        return
     n = args.side * args.side
     figures: dict[str, float] = {}
     with bench_database() as conn:
@@ -77,6 +97,77 @@ def main() -> None:
         print(f"{n} points in R^3, one object; the face's rows equal the rows' bit for bit: {same}")
         for name, value in figures.items():
             print(f"{name}: {value:.3f}")
+
+
+def transfer(side: int, repeat: int) -> None:
+    """Upload and download of one object's points: the client codec against the server's path."""
+    n = side * side
+    rng = np.random.default_rng(1)
+    grid = np.arange(n)
+    points = np.stack([grid % side + rng.random(n), grid // side + rng.random(n), 100 * rng.random(n)], axis=1)
+    points[:3, 2] = (-0.0, 5e-324, float(np.frombuffer(np.uint64(0x7FF8_0000_0000_0ABC).tobytes(), np.float64)[0]))
+    ids = np.arange(n, dtype=np.int64)
+    times: dict[str, list[float]] = {}
+    with bench_database() as conn:
+        conn.execute("SELECT tgsis.store_in_chunks('md_vertex')")
+        conn.commit()
+        storage = _transfer.Storage.of(conn)
+        geoid = 0
+        objects: dict[str, list[int]] = {"client": [], "server": []}
+        reads: dict[str, bytes] = {}
+
+        def columns(g: int) -> list[tuple[str, object, str]]:
+            return [("geoid", np.full(n, g), "int8"), ("vrtxid", ids, "int8"), ("coordinate", points, "float8[3]")]
+
+        for k in range(repeat):
+            for path in ("client", "server") if k % 2 == 0 else ("server", "client"):
+                geoid += 1
+                start = time.perf_counter()
+                if path == "client":
+                    assert _chunk_transfer.upload_rows(conn, "md_vertex", columns(geoid), storage)
+                else:
+                    _transfer.insert_chunk_rows(conn, "md_vertex", columns(geoid))
+                conn.commit()
+                times.setdefault(f"upload_{path}_seconds", []).append(time.perf_counter() - start)
+                objects[path].append(geoid)
+        conn.autocommit = True
+        conn.execute("VACUUM ANALYZE tgsis.md_vertex_chunk")
+        conn.autocommit = False
+        chunk_rows = "SELECT chunk, revision, holes, array_send(coordinate) FROM tgsis.md_vertex_chunk WHERE geoid = %s ORDER BY 1"
+        same_chunks = (
+            conn.execute(chunk_rows, (objects["client"][0],)).fetchall()
+            == conn.execute(chunk_rows, (objects["server"][0],)).fetchall()
+        )
+        conn.rollback()
+        target = objects["client"][0]
+        for k in range(repeat):
+            for path in ("client", "face") if k % 2 == 0 else ("face", "client"):
+                start = time.perf_counter()
+                if path == "client":
+                    got = _chunk_transfer.point_rows(conn, "md_vertex", target, 3)
+                    assert got is not None
+                else:
+                    got = copy_rows(
+                        conn,
+                        "SELECT vrtxid, coordinate FROM tgsis.md_vertex WHERE geoid = {}",
+                        target,
+                        ["int8", "float8[3]"],
+                        [0],
+                    )
+                conn.rollback()
+                times.setdefault(f"download_{path}_seconds", []).append(time.perf_counter() - start)
+                reads[path] = b"".join(
+                    np.ascontiguousarray(np.asarray(c, dtype=c.dtype.newbyteorder("="))).tobytes() for c in got
+                )
+    best = {name: min(values) for name, values in times.items()}
+    print(
+        f"{n} points in R^3, one model-5 object, unversioned; chunk rows equal bit for bit: {same_chunks}; "
+        f"points read equal bit for bit: {reads['client'] == reads['face']}"
+    )
+    for name, value in best.items():
+        print(f"{name}: {value:.3f}")
+    print(f"upload_server_over_client: {best['upload_server_seconds'] / best['upload_client_seconds']:.2f}")
+    print(f"download_face_over_client: {best['download_face_seconds'] / best['download_client_seconds']:.2f}")
 
 
 if __name__ == "__main__":

@@ -476,3 +476,74 @@ def test_an_integer_key_is_written_in_its_width_and_refused_out_of_range() -> No
     for kinds in [("int2", "int2"), ("text",)]:  # one kind per key, of the kinds a key may have
         with pytest.raises(InvalidInputError, match="kinds"):
             ChunkColumns(("dartid2",), refs=("dartid2",), instant=("level",), instant_kinds=kinds)
+
+
+POINTS = ChunkColumns(("coordinate",), points=("coordinate",))
+
+
+@pytest.mark.parametrize("m", [1, 3])
+def test_points_round_trip_as_two_dimensional_arrays_m_per_object(m: int) -> None:
+    """A G-map's points (role ``point``): slots x m from [1][1], a hole m NULLs, m read back from the array."""
+    ids = np.array([0, 2, 3, 1023, 1030, 5000], dtype=np.int64)
+    points = np.resize(ODD_BITS, len(ids) * m).reshape(len(ids), m)
+    chunks = encode(ids, {"coordinate": points}, POINTS)
+    stream = to_copy(chunks, 1)
+    # the first chunk's array: 2 dimensions, 4 slots x m, NULL bitmap (a hole at slot 2)
+    first = _fields(stream)[0][-1]  # the first chunk's coordinate field (length word, then array_send)
+    assert np.frombuffer(first, ">i4", 8).tolist()[1:] == [2, 1, 701, 1024, 1, m, 1]
+    assert np.frombuffer(_fields(stream)[1][-1], ">i4", 8).tolist()[1:] == [
+        2,
+        1,
+        701,
+        7,
+        1,
+        m,
+        1,
+    ]  # 1024..1030: holes below 1030
+    back = from_copy(_as_selected(stream, POINTS), POINTS)
+    got_ids, got = back.rows()
+    assert got_ids.tolist() == ids.tolist()
+    assert got["coordinate"].shape == (len(ids), m)
+    assert got["coordinate"].tobytes() == points.tobytes()
+
+
+def _fields(stream: bytes) -> list[list[bytes]]:
+    """The rows of a binary COPY stream, each field with its length word."""
+    view = memoryview(stream)
+    rows: list[list[bytes]] = []
+    pos = 19
+    while True:
+        count = int.from_bytes(view[pos : pos + 2], "big", signed=True)
+        if count == -1:
+            return rows
+        pos += 2
+        fields = []
+        for _ in range(count):
+            length = int.from_bytes(view[pos : pos + 4], "big", signed=True)
+            fields.append(bytes(view[pos : pos + 4 + max(length, 0)]))
+            pos += 4 + max(length, 0)
+        rows.append(fields)
+
+
+def _as_selected(stream: bytes, spec: ChunkColumns) -> bytes:
+    """A to_copy stream as from_copy reads it: without the geoid and revision fields."""
+    out = [stream[:19]]
+    for fields in _fields(stream):
+        keep = [f for f, name in zip(fields, spec.copy_columns()) if name in spec.select_columns()]
+        out.append(len(keep).to_bytes(2, "big") + b"".join(keep))
+    out.append(b"\xff\xff")
+    return b"".join(out)
+
+
+def test_points_of_no_coordinates_or_two_lengths_are_refused() -> None:
+    with pytest.raises(InvalidInputError, match="holds points"):
+        encode([0, 1], {"coordinate": np.zeros((2, 0))}, POINTS)
+    with pytest.raises(InvalidInputError, match="holds points"):
+        encode([0, 1], {"coordinate": np.zeros(2)}, POINTS)
+    two = to_copy(encode([0], {"coordinate": np.zeros((1, 2))}, POINTS), 1)
+    three = to_copy(encode([1024], {"coordinate": np.zeros((1, 3))}, POINTS), 1)
+    joined = two[:-2] + three[19:]
+    with pytest.raises(InvalidInputError, match="different lengths"):
+        from_copy(_as_selected(joined, POINTS), POINTS)
+    with pytest.raises(InvalidInputError, match="must be float8 columns among them"):
+        ChunkColumns(("v",), refs=("v",), points=("v",))

@@ -108,6 +108,11 @@ class ChunkColumns:
         Those of the properties that are vectors (a class's vector property, role ``vector``), with their size
         k >= 2: one two-dimensional array per chunk, slots x k from ``[1][1]``, whose row is k NULLs at a hole
         and at a NULL vector (docs/storage.md, "Vector properties in chunks"); their values are (n, k).
+    points : tuple of str
+        Those of ``names`` that are a G-map's points (role ``point``: ``gmap_vertex``, ``md_vertex``), float8: one
+        two-dimensional array per chunk, slots x m from ``[1][1]``, m >= 1 the object's (not the table's: read
+        from the values when encoded, from the array when decoded), a row of m NULLs at a hole and none elsewhere
+        (docs/storage.md, "The points in chunks"); their values are (n, m).
     """
 
     names: tuple[str, ...]
@@ -118,10 +123,15 @@ class ChunkColumns:
     instant: tuple[str, ...] = ()
     instant_kinds: tuple[str, ...] = ()
     vectors: tuple[tuple[str, int], ...] = ()
+    points: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         kinds = dict(self.properties)
         sizes = dict(self.vectors)
+        if any(p not in self.names or p in kinds or p in self.refs or p in self.integers for p in self.points):
+            raise InvalidInputError(
+                f"chunk columns {list(self.names)}: points {list(self.points)} must be float8 columns among them"
+            )
         if len(sizes) != len(self.vectors) or any(n not in kinds or int(k) < 2 for n, k in self.vectors):
             raise InvalidInputError(
                 f"chunk columns {list(self.names)}: vectors {list(self.vectors)} must be distinct properties "
@@ -164,7 +174,10 @@ class ChunkColumns:
         return int(dict(self.vectors).get(name, 1))
 
     def shape(self, name: str, n: int) -> tuple[int, ...]:
-        """The shape of ``n`` rows of column ``name``: ``(n,)``, or ``(n, k)`` for a vector property."""
+        """The shape of ``n`` rows of column ``name``: ``(n,)``, ``(n, k)`` for a vector property, ``(n, 0)`` for a
+        point (m unknown: the object's)."""
+        if name in self.points:
+            return (n, 0)
         k = self.size(name)
         return (n, k) if k > 1 else (n,)
 
@@ -395,6 +408,13 @@ def encode(
     refs: dict[str, IntArray] = {}
     for name in spec.names:
         raw = np.asarray(columns[name])
+        if name in spec.points:  # (n, m): m the object's, one for all its points
+            if raw.ndim != 2 or raw.shape[0] != n or raw.shape[1] < 1 or raw.dtype.newbyteorder("=") != np.float64:
+                raise InvalidInputError(
+                    f"column {name!r} holds points: (n, m) float64 with m >= 1 expected, got {raw.dtype} {raw.shape}"
+                )
+            values[name] = slotted(in_id_order(raw), np.float64)
+            continue
         if raw.shape != spec.shape(name, n):
             raise InvalidInputError(f"column {name!r} has shape {raw.shape}, expected {spec.shape(name, n)}")
         if name in spec.refs:
@@ -540,12 +560,13 @@ def _element_bytes(values: npt.NDArray[Any], kind: str, present: BoolArray) -> t
     return raw[keep], np.cumsum(np.where(present, 4 + width, 4).astype(np.int64))
 
 
-def _array_field(body: bytes, kind: str, count: int, hasnull: bool, size: int = 1) -> bytes:
+def _array_field(body: bytes, kind: str, count: int, hasnull: bool, size: int = 1, matrix: bool = False) -> bytes:
     """One array value with its field length word (array_recv form, lower bounds 1).
 
-    One dimension of ``count``; ``size`` > 1: two, ``count`` x ``size`` (a vector property's rows).
+    One dimension of ``count``; ``size`` > 1 or ``matrix``: two, ``count`` x ``size`` (a vector property's rows,
+    a point's).
     """
-    if size > 1:
+    if size > 1 or matrix:
         words = [28 + len(body), 2, int(hasnull), _OID[kind], count, 1, size, 1]
         return np.array(words, dtype=">i4").tobytes() + body
     header = np.array([20 + len(body), 1, int(hasnull), _OID[kind], count, 1], dtype=">i4").tobytes()
@@ -610,12 +631,16 @@ def to_copy(chunks: ChunkSet, geoid: int, revision: int = 0, instant: tuple[floa
     # every array column's elements, flat over all slots, with the byte end of each slot
     # (kind, element bytes, slot byte ends, chunks where the column is NULL, chunks whose array has NULL elements,
     # values a slot: a vector property's k, its slot a row of k elements of the 2-D array)
-    encoded: list[tuple[str, npt.NDArray[np.uint8], IntArray, BoolArray | None, BoolArray, int]] = []
+    encoded: list[tuple[str, npt.NDArray[np.uint8], IntArray, BoolArray | None, BoolArray, int, bool]] = []
     empty = (np.empty(0, dtype=np.uint8), np.empty(0, dtype=np.int64))
     for name in spec.names:
         if name in spec.refs:
             relative = empty if chunks.wide.all() else _element_bytes(chunks.relative[name], "int4", chunks.present)
-            encoded.append(("int4", *relative, chunks.wide, has_holes, 1))
+            encoded.append(("int4", *relative, chunks.wide, has_holes, 1, False))
+        elif name in spec.points:  # m elements a slot, all NULL at a hole (never elsewhere)
+            m = int(chunks.values[name].shape[1])
+            flat, ends = _element_bytes(chunks.values[name].reshape(-1), "float8", np.repeat(chunks.present, m))
+            encoded.append(("float8", flat, ends[m - 1 :: m], None, has_holes, m, True))
         else:
             kind = spec.kind(name)
             size = spec.size(name)
@@ -626,12 +651,12 @@ def to_copy(chunks: ChunkSet, geoid: int, revision: int = 0, instant: tuple[floa
                 hasnull = np.logical_not(np.logical_and.reduceat(elements, offsets[:-1])) if c else has_holes
             if size > 1:  # a vector: k elements a slot, all NULL at a hole and at a NULL vector
                 flat, ends = _element_bytes(chunks.values[name].reshape(-1), kind, np.repeat(elements, size))
-                encoded.append((kind, flat, ends[size - 1 :: size], None, hasnull, size))
+                encoded.append((kind, flat, ends[size - 1 :: size], None, hasnull, size, False))
             else:
-                encoded.append((kind, *_element_bytes(chunks.values[name], kind, elements), None, hasnull, 1))
+                encoded.append((kind, *_element_bytes(chunks.values[name], kind, elements), None, hasnull, 1, False))
     for name in spec.ref_order:
         wide = _element_bytes(chunks.absolute[name], "int8", chunks.present) if chunks.wide.any() else empty
-        encoded.append(("int8", *wide, ~chunks.wide, has_holes, 1))
+        encoded.append(("int8", *wide, ~chunks.wide, has_holes, 1, False))
 
     pieces: list[bytes] = [COPY_SIGNATURE, np.array([0, 0], dtype=">i4").tobytes()]
     for k in range(c):
@@ -651,13 +676,13 @@ def to_copy(chunks: ChunkSet, geoid: int, revision: int = 0, instant: tuple[floa
             else:
                 pieces.append(np.array([(8, chunks.vbase[k])], dtype=[("l", ">i4"), ("v", ">i8")]).tobytes())
             pieces.append(np.array([(8, vtop[k])], dtype=[("l", ">i4"), ("v", ">i8")]).tobytes())
-        for kind, flat, ends, nulled, hasnull, size in encoded:
+        for kind, flat, ends, nulled, hasnull, size, matrix in encoded:
             if nulled is not None and nulled[k]:
                 pieces.append(null)
                 continue
             first = int(ends[start - 1]) if start else 0
             body = flat[first : int(ends[stop - 1])].tobytes()
-            pieces.append(_array_field(body, kind, count, bool(hasnull[k]), size))
+            pieces.append(_array_field(body, kind, count, bool(hasnull[k]), size, matrix))
     pieces.append(np.array([-1], dtype=">i2").tobytes())
     return b"".join(pieces)
 
@@ -870,6 +895,7 @@ def from_copy(payload: bytes, spec: ChunkColumns) -> ChunkSet:
     with_holes: dict[tuple[str, bool], dict[int, npt.NDArray[Any]]] = {(key, w): {} for _, key, w in columns}
     null_parts: dict[str, dict[int, BoolArray]] = {}  # a property's NULL values at present slots, per chunk index
     vector_parts: dict[str, dict[int, npt.NDArray[Any]]] = {n: {} for n, _ in spec.vectors}  # (slots, k) per chunk
+    point_parts: dict[str, dict[int, npt.NDArray[Any]]] = {n: {} for n in spec.points}  # (slots, m) per chunk
     while True:
         count = reader.int(2)
         if count == -1:
@@ -930,6 +956,20 @@ def from_copy(payload: bytes, spec: ChunkColumns) -> ChunkSet:
                     if int(holes.min()) < 1 or int(holes.max()) >= len(present):
                         raise InvalidInputError(f"chunk {number}: holes {holes.tolist()} outside 1..{len(present) - 1}")
                     present[holes - 1] = False
+            if key in point_parts:  # a point's 2-D array, slots x m (m the chunk's: from its header)
+                m = (
+                    int(np.frombuffer(reader.buf, dtype=">i4", count=1, offset=reader.pos + 20)[0])
+                    if length >= 28
+                    else 0
+                )
+                if m < 1:
+                    raise InvalidInputError(f"chunk {number}: column {name} is not a 2-D array of points of m >= 1")
+                point, rows = _parse_vector(reader, length, "float8", present, m)
+                if not np.array_equal(rows, present):
+                    raise InvalidInputError(f"chunk {number}: column {name} has a NULL point at a present slot")
+                point_parts[key][k] = point
+                in_batch[slot].append(False)
+                continue
             if key in vector_parts:  # a vector property's 2-D array
                 vector, rows = _parse_vector(reader, length, kind, present, spec.size(key))
                 missing = present & ~rows
@@ -999,8 +1039,16 @@ def from_copy(payload: bytes, spec: ChunkColumns) -> ChunkSet:
     values = {
         n: sorted_slots(column((n, False), spec.kind(n), spec.dtype(n)))
         for n in spec.names
-        if n not in spec.refs and n not in vector_parts
+        if n not in spec.refs and n not in vector_parts and n not in point_parts
     }
+    for name, parts in point_parts.items():
+        sizes = sorted({int(p.shape[1]) for p in parts.values()})
+        if len(sizes) > 1:
+            raise InvalidInputError(f"the chunks of column {name} hold points of different lengths {sizes}")
+        out = np.zeros((int(offsets[-1]), sizes[0] if sizes else 0), dtype=np.float64)
+        for k, point in parts.items():
+            out[offsets[k] : offsets[k + 1]] = point
+        values[name] = sorted_slots(out)
     for name, parts in vector_parts.items():
         out = np.zeros((int(offsets[-1]), spec.size(name)), dtype=spec.dtype(name))
         for k, vector in parts.items():

@@ -32,7 +32,7 @@ from __future__ import annotations
 import concurrent.futures
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -65,6 +65,7 @@ __all__ = [
     "upload_instants",
     "write_instants",
     "upload_rows",
+    "point_rows",
     "INSTANT_BLOCK_BITS",
 ]
 
@@ -178,15 +179,18 @@ def chunk_table(conn: Conn, table: str, *, instants: bool = False, values: bool 
         "SELECT to_regclass(format('tgsis.%%I', %s::text || '_chunk'))::oid, "
         "EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = %s), "
         "(SELECT m.chunksize FROM tgsis.model_tables m WHERE m.tablename = %s), "
-        "has_table_privilege(to_regclass(format('tgsis.%%I', %s::text || '_chunk')), 'SELECT')",
-        (table, table, table, table),
+        "has_table_privilege(to_regclass(format('tgsis.%%I', %s::text || '_chunk')), 'SELECT'), "
+        # a G-map's points: the face's double precision[] columns (role 'point': one 2-D array per chunk)
+        "ARRAY(SELECT a.attname::text FROM pg_catalog.pg_attribute a WHERE a.attrelid = to_regclass(format('tgsis.%%I', "
+        "%s::text)) AND a.attnum > 0 AND NOT a.attisdropped AND a.atttypid = 'double precision[]'::regtype)",
+        (table, table, table, table, table),
     ).fetchone()
     if row is None or row[0] is None:
         raise NotFoundError(
             f"tgsis.{table} has no chunk table",
             detail=f"tgsis.{table}_chunk does not exist (tgsis.create_chunk_table makes it)",
         )
-    oid, versioned, size, readable = row
+    oid, versioned, size, readable, points = row
     # the columns as the snapshot sees them: none if the table was made (a storage switch) or a property added after
     # it, which the snapshot would read empty: 40001 then (tgsis.chunk_snapshot_guard), not a layout refused
     attributes = conn.execute(
@@ -204,7 +208,7 @@ def chunk_table(conn: Conn, table: str, *, instants: bool = False, values: bool 
         refs = tuple(n for n, t in arrays if t == "integer[]")
     types = dict(attributes)
     instant = tuple(keys[1:-1]) if instants or values else ()
-    key_types = ("smallint", "integer", "bigint") if values else ("double precision",)
+    key_types = ("smallint", "integer", "bigint", "double precision") if values else ("double precision",)
     kinds = {n: _VALUE_KINDS.get(t) for n, t in arrays if values and n not in refs and t != "double precision[]"}
     if (
         keys != ["geoid", *instant, "chunk"]
@@ -225,6 +229,7 @@ def chunk_table(conn: Conn, table: str, *, instants: bool = False, values: bool 
         properties=tuple((n, str(k)) for n, k in kinds.items()),
         instant=instant,
         instant_kinds=tuple(_KEY_KINDS[types[k]] for k in instant) if values else (),
+        points=tuple(n for n in points if n in dict(arrays)),
     )
     return ChunkTable(table, spec, bool(versioned), bool(readable))
 
@@ -232,7 +237,7 @@ def chunk_table(conn: Conn, table: str, *, instants: bool = False, values: bool 
 #: the element kind (:data:`tgsis._chunks.PROPERTY_KINDS`) of a G-map chunk table's value column, by its type
 _VALUE_KINDS = {"smallint[]": "int2", "integer[]": "int4", "bigint[]": "int8", "real[]": "float4", "boolean[]": "bool"}
 #: the kind of an integer key column between ``geoid`` and ``chunk`` (a G-map involution's ``level``)
-_KEY_KINDS = {"smallint": "int2", "integer": "int4", "bigint": "int8"}
+_KEY_KINDS = {"smallint": "int2", "integer": "int4", "bigint": "int8", "double precision": "float8"}
 
 
 def upload_chunks(conn: Conn, table: str, objects: Sequence[ObjectRows], storage: Storage | None = None) -> int:
@@ -1001,10 +1006,10 @@ def write_instants(
 
 
 def upload_rows(conn: Conn, table: str, columns: Sequence[tuple[str, npt.ArrayLike, str]], storage: Storage) -> bool:
-    """Write a new G-map's darts or involutions as chunk rows encoded here: one binary COPY (issue 40, plan K G2).
+    """Write a new G-map's darts, involutions or points as chunk rows encoded here: one binary COPY (plan K G2; M, Q).
 
-    The upload of ``insert_gmap`` / ``insert_md_gmap`` into ``gmap_dart``, ``md_dart``, ``gmap_alpha`` or
-    ``md_alpha`` stored in chunks (:meth:`Storage.copy_all`), as model 1's :func:`upload_chunks` and models 2
+    The upload of ``insert_gmap`` / ``insert_md_gmap`` into ``gmap_dart``, ``md_dart``, ``gmap_alpha``,
+    ``md_alpha``, ``gmap_vertex`` or ``md_vertex`` stored in chunks (:meth:`Storage.copy_all`), as model 1's :func:`upload_chunks` and models 2
     and 3's :func:`upload_instants`: the rows are grouped by their keys before ``chunk`` (``geoid``, and
     ``level`` for the involutions), each group's chunks encoded by numpy (:func:`~tgsis._chunks.encode`: the
     point or image a ref column relative to the chunk's smallest, ``acellid`` and ``positive`` arrays that may
@@ -1014,21 +1019,25 @@ def upload_rows(conn: Conn, table: str, columns: Sequence[tuple[str, npt.ArrayLi
     unversioned); after the checks ``tgsis.insert_chunk_rows`` makes: not locked by another version (TG303),
     the object's write lock taken. The objects are noted as changed in the working revision.
 
+    A G-map's points (``gmap_vertex``, ``md_vertex``: wire type ``float8[m]``, values (n, m)) are encoded as
+    the server's writer encodes them (role ``point``: one 2-D array per chunk, slots x m, a hole m NULLs); every
+    point has the object's m coordinates (the wire type's, the embedding the upload states), checked before
+    anything is sent.
+
     Parameters
     ----------
     columns : sequence of (str, (n,) array_like, str)
         ``(name, values, wire type)`` as :meth:`Storage.copy` takes them: every column of the row table once
         (the key columns, the id column, the arrays), those that may be NULL (``acellid``, ``positive``) left
-        out when NULL in every row.
+        out when NULL in every row; a point column (n, m).
 
     Returns
     -------
     bool
         False, with nothing written, when the chunk table holds chunks of one of these objects already (in any
         version or revision), or the role may not read the chunk table (granted the face alone), or a key is
-        negative (a ``level``: the row table's CHECK, which the server's path applies), or the table is a G-map's
-        points (``gmap_vertex``, ``md_vertex``: a column ``float8[m]``, which this codec does not encode yet): the caller then writes through ``tgsis.insert_chunk_rows`` (:meth:`Storage.copy`),
-        which answers as the rows would.
+        negative (a ``level``: the row table's CHECK, which the server's path applies): the caller then writes
+        through ``tgsis.insert_chunk_rows`` (:meth:`Storage.copy`), which answers as the rows would.
 
     Raises
     ------
@@ -1040,13 +1049,16 @@ def upload_rows(conn: Conn, table: str, columns: Sequence[tuple[str, npt.ArrayLi
     psycopg.errors.InsufficientPrivilege
         The role lacks INSERT on the chunk table, or the class's right.
     """
-    if any(wire.startswith("float8[") for _, _, wire in columns):
-        return False  # a G-map's points (a 2-D array per chunk: no client codec yet): the server's path
     layout = chunk_table(conn, table, values=True)
     if not layout.readable:  # a role granted the face alone: the server's path, which answers as the rows
         return False
     spec = layout.columns
-    given = {name: np.asarray(values) for name, values, _ in columns}
+    if not spec.points and any(wire.startswith("float8[") for _, _, wire in columns):
+        raise InvalidInputError(f"tgsis.{table} has no points: columns {[(n, w) for n, _, w in columns]}")
+    given = {
+        name: _points(table, name, values, wire, columns) if name in spec.points else np.asarray(values)
+        for name, values, wire in columns
+    }
     keys = ("geoid", *spec.instant)
     extra = [n for n in given if n not in keys and n not in spec.names]
     missing = [n for n in (*keys, *spec.names) if n not in given and not spec.nullable(n)]
@@ -1058,22 +1070,31 @@ def upload_rows(conn: Conn, table: str, columns: Sequence[tuple[str, npt.ArrayLi
         )
     ids = given[extra[0]]
     count = len(ids)
-    if any(v.shape != (count,) for v in given.values()):
+    if any(v.shape[:1] != (count,) or (v.ndim != 1 and n not in spec.points) for n, v in given.items()):
         raise InvalidInputError(
             f"tgsis.{table}: every column of an upload has one value per row ({count})",
             detail=f"shapes {[(n, v.shape) for n, v in given.items()]}",
         )
-    if any(given[k].size and given[k].dtype.kind not in "iu" for k in keys):
+    floats = {k for k, kind in zip(spec.instant, spec.instant_kinds) if kind == "float8"}  # a point's timem, timet
+    if any(given[k].size and given[k].dtype.kind not in ("f" if k in floats else "iu") for k in keys):
         raise InvalidInputError(
-            f"tgsis.{table}: the key columns {list(keys)} of an upload are integers",
+            f"tgsis.{table}: the key columns {list(keys)} of an upload are integers"
+            + (f" ({sorted(floats)} float64)" if floats else ""),
             detail=f"types {[(k, str(given[k].dtype)) for k in keys]}",
         )
-    if any(given[k].size and int(given[k].min()) < 0 for k in keys):
+    if any(given[k].size and int(given[k].min()) < 0 for k in keys if k not in floats):
         return False  # the row table's CHECK (level >= 0), which the server's path applies (23514)
+    if any(
+        given[k].size and bool((np.isnan(given[k]) | ((given[k] == 0) & np.signbit(given[k]))).any()) for k in floats
+    ):
+        return False  # an instant -0.0 or NaN: equal to other bits as a key; the server's path answers as the rows
     storage.check("tgsis", table)
     revision = int(storage.revision or 0) if ("tgsis", table) in storage.versioned else 0
     # the groups of rows by their keys before chunk (an object's darts; an object's involution of one level)
-    stacked = np.stack([given[k].astype(np.int64) for k in keys], axis=1)
+    # (a float key by its bits: one group per instant as given)
+    stacked = np.stack(
+        [given[k].astype(np.float64).view(np.int64) if k in floats else given[k].astype(np.int64) for k in keys], axis=1
+    )
     groups, inverse, sizes = np.unique(stacked, axis=0, return_inverse=True, return_counts=True)
     order = np.argsort(inverse.reshape(-1), kind="stable")
     bounds = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
@@ -1088,10 +1109,13 @@ def upload_rows(conn: Conn, table: str, columns: Sequence[tuple[str, npt.ArrayLi
             else:  # left out: NULL in every row, as a COPY leaves it
                 values[name] = np.zeros(len(rows), dtype=spec.dtype(name))
                 nulls[name] = np.ones(len(rows), dtype=bool)
-        encoded.append((encode(ids[rows], values, spec, nulls), tuple(int(v) for v in groups[g])))
+        key = tuple(
+            float(np.int64(v).view(np.float64)) if name in floats else int(v) for name, v in zip(keys, groups[g])
+        )
+        encoded.append((encode(ids[rows], values, spec, nulls), key))
     if not encoded:
         return True
-    objects = [str(g) for g in sorted({key[0] for _, key in encoded})]
+    objects = [str(g) for g in sorted({int(key[0]) for _, key in encoded})]
     if ("tgsis", table) in storage.versioned:
         conn.execute("SELECT tgsis.check_objects_unlocked('feature', %s::text[])", (objects,))  # TG303
     conn.execute("SELECT tgsis.object_write_lock('feature', %s::text[])", (objects,))  # no face writer in flight
@@ -1106,9 +1130,102 @@ def upload_rows(conn: Conn, table: str, columns: Sequence[tuple[str, npt.ArrayLi
     with staged(conn, layout.relation, copy_columns) as into:
         with conn.cursor().copy(statement.format(into, sql.SQL(", ").join(map(sql.Identifier, copy_columns)))) as copy:
             for k, (chunks, key) in enumerate(encoded):
-                stream = to_copy(chunks, key[0], revision, key[1:])
+                stream = to_copy(chunks, int(key[0]), revision, key[1:])
                 # one stream: the header once, the trailer once
                 copy.write(memoryview(stream)[19 if k else 0 : -2 if k < len(encoded) - 1 else None])
     if layout.versioned and revision != 0:
         conn.execute("SELECT tgsis.record_changed_objects('tgsis', %s, %s::text[])", (table, objects))
     return True
+
+
+def _points(
+    table: str, name: str, values: npt.ArrayLike, wire: str, columns: Sequence[tuple[str, npt.ArrayLike, str]]
+) -> npt.NDArray[np.float64]:
+    """A point column of :func:`upload_rows` as (n, m) float64, every point of the object's m coordinates.
+
+    m is the wire type's (``float8[m]``: the embedding the upload states); a point of another length (a ragged
+    sequence) or of none is refused by name, before anything is sent.
+
+    Raises
+    ------
+    InvalidInputError
+        Naming the table, the column, the object and the first point of another length.
+    """
+    m = int(wire[7:-1]) if wire.startswith("float8[") and wire.endswith("]") and wire[7:-1].isdigit() else 0
+    if m < 1:
+        raise InvalidInputError(
+            f"tgsis.{table}: column {name} holds points: its wire type is float8[m], m >= 1, not {wire}"
+        )
+    try:
+        points: npt.NDArray[np.float64] | None = np.asarray(values, dtype=np.float64)
+    except ValueError:  # a ragged sequence: points of several lengths
+        points = None
+    if points is not None and points.ndim == 2 and points.shape[1] == m:
+        return points
+    if points is not None and points.ndim == 2:  # (n, m') with m' != m: the first point is of another length
+        row, length = 0, int(points.shape[1])
+    else:
+        lengths = [int(np.asarray(p).size) for p in cast(Sequence[Any], values)]
+        row = next((i for i, n in enumerate(lengths) if n != m), 0)
+        length = lengths[row] if lengths else 0
+    geoid = next((int(np.asarray(v)[row]) for n, v, _ in columns if n == "geoid" and len(np.asarray(v)) > row), None)
+    raise InvalidInputError(
+        f"tgsis.{table}: the points of object {geoid} are not all of its {m} coordinates",
+        detail=f"column {name}: row {row} has {length} coordinates; nothing was written",
+        hint="every point of a G-map has the embedding's number of coordinates",
+    )
+
+
+def point_rows(
+    conn: Conn, table: str, geoid: int, m: int, chunked: frozenset[str] | None = None
+) -> list[npt.NDArray[Any]] | None:
+    """A G-map's points read from their chunks, decoded here: ``[*keys, id, coordinate (n, m)]`` in key order.
+
+    What ``copy_rows`` of the face gives (``gmap_vertex``: ``timem, timet, nodeid, coordinate``; ``md_vertex``:
+    ``vrtxid, coordinate``), bit for bit, from the chunk versions the session sees (:func:`visible_chunks`),
+    one query, the role's rights.
+
+    Parameters
+    ----------
+    table : str
+        ``gmap_vertex`` or ``md_vertex``.
+    m : int
+        The object's embedding: every point has m coordinates.
+    chunked : frozenset of str, optional
+        :func:`chunked_tables` (read when not given).
+
+    Returns
+    -------
+    list of ndarray, or None
+        None when the table is stored as rows, or the role may not read its chunk table (it reads the face).
+
+    Raises
+    ------
+    InvalidInputError
+        Chunks that break the contract.
+    DatabaseError
+        Points of another length than m.
+    """
+    if table not in (chunked if chunked is not None else chunked_tables(conn)):
+        return None
+    layout = chunk_table(conn, table, instants=table == "gmap_vertex")
+    if not layout.readable or not layout.columns.points:
+        return None
+    point = layout.columns.points[0]
+    if layout.columns.instant:
+        groups = sorted(instant_rows(conn, layout, [geoid]).items())
+    else:
+        groups = [((geoid,), _objects(layout, [geoid], _copy_out(conn, chunk_copy_query(layout, [geoid])))[geoid])]
+    sizes = {int(o.columns[point].shape[1]) for _, o in groups if len(o.ids)}
+    if sizes - {m}:  # (as the face's read refuses them: a value of another size)
+        raise DatabaseError(
+            f"tgsis.{table}: the points of object {geoid} have {sorted(sizes)} coordinates, not its embedding's {m}"
+        )
+    counts = [len(o.ids) for _, o in groups]
+    keys = [
+        np.repeat(np.asarray([key[1 + i] for key, _ in groups], dtype=np.float64), counts)
+        for i in range(len(layout.columns.instant))
+    ]
+    ids = np.concatenate([np.empty(0, dtype=np.int64), *(o.ids for _, o in groups)])
+    points = np.concatenate([np.empty((0, m)), *(o.columns[point].reshape(-1, m) for _, o in groups)])
+    return [*keys, ids, points]

@@ -31,7 +31,7 @@ from psycopg import sql
 from tgsis import datamodels
 from tgsis._series import check_time
 from tgsis.arguments import checked, no_nul
-from tgsis.db._chunk_transfer import upload_rows
+from tgsis.db._chunk_transfer import point_rows, upload_rows
 from tgsis.db._continuity import check_continuity, checked_tolerance
 from tgsis.db._gmap_common import (
     Conn,
@@ -376,13 +376,16 @@ def fetch_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -
         nodes = copy_rows(
             conn, "SELECT timem, nodeid FROM tgsis.gmap_node WHERE geoid = {}", feature_id, ["float8", "int8"], [0, 1]
         )
-        vertex = copy_rows(
-            conn,
-            "SELECT timem, timet, nodeid, coordinate FROM tgsis.gmap_vertex WHERE geoid = {}",
-            feature_id,
-            ["float8", "float8", "int8", f"float8[{m}]"],
-            [0, 1, 2],
-        )
+        # the points in chunks: decoded here (tgsis.db._chunk_transfer.point_rows), else read through the face
+        vertex = point_rows(conn, "gmap_vertex", feature_id, m)
+        if vertex is None:
+            vertex = copy_rows(
+                conn,
+                "SELECT timem, timet, nodeid, coordinate FROM tgsis.gmap_vertex WHERE geoid = {}",
+                feature_id,
+                ["float8", "float8", "int8", f"float8[{m}]"],
+                [0, 1, 2],
+            )
         dart = copy_rows(
             conn,
             "SELECT timem, dartid, nodeid, coalesce(acellid, -1) FROM tgsis.gmap_dart WHERE geoid = {}",

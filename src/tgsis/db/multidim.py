@@ -23,7 +23,7 @@ from psycopg import sql
 
 from tgsis import datamodels
 from tgsis.arguments import checked, no_nul
-from tgsis.db._chunk_transfer import upload_rows
+from tgsis.db._chunk_transfer import point_rows, upload_rows
 from tgsis.db._cube import cube_name
 from tgsis.db._gmap_common import (
     Conn,
@@ -223,13 +223,16 @@ def fetch_md_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int
         if head is None:
             raise NotFoundError(f"feature class {fc.name} has no multiply indexed G-map feature {feature_id}")
         n, m, axes = int(head[0]), int(head[1]), tuple(head[2])
-        vertex = copy_rows(
-            conn,
-            "SELECT vrtxid, coordinate FROM tgsis.md_vertex WHERE geoid = {}",
-            feature_id,
-            ["int8", f"float8[{m}]"],
-            [0],
-        )
+        # the points in chunks: decoded here (tgsis.db._chunk_transfer.point_rows), else read through the face
+        vertex = point_rows(conn, "md_vertex", feature_id, m)
+        if vertex is None:
+            vertex = copy_rows(
+                conn,
+                "SELECT vrtxid, coordinate FROM tgsis.md_vertex WHERE geoid = {}",
+                feature_id,
+                ["int8", f"float8[{m}]"],
+                [0],
+            )
         dart = copy_rows(
             conn,
             "SELECT dartid, vrtxid, coalesce(acellid, -1) FROM tgsis.md_dart WHERE geoid = {}",
