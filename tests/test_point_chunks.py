@@ -275,3 +275,57 @@ def test_pg_dump_and_restore_keep_the_points_in_chunks(pg: Any, db_dsn: str, con
         assert _rows(copy) == before
         _switch(copy, "rows")
         assert _rows(copy) == before
+
+
+def _checked(conn: Conn, *geoids: int) -> list[tuple[Any, ...]]:
+    """tgsis.check_geometry's problems of each object, in order."""
+    return [
+        (g, *r)
+        for g in geoids
+        for r in conn.execute("SELECT * FROM tgsis.check_geometry(%s) ORDER BY 1", (g,)).fetchall()
+    ]
+
+
+@pytest.mark.parametrize("versioned", [False, True])
+def test_an_object_of_points_of_one_other_length_than_its_embedding_goes_as_on_rows(
+    conn: Conn, versioned: bool
+) -> None:
+    """Points all of one length other than the object's embedding: the row table holds them and
+    tgsis.check_geometry reports them; chunks hold them too (m per chunk is the points', not the embedding's), so
+    the switch takes them, bit for bit, check_geometry says the same, and the repair (every point given its
+    embedding's length through the face) and a write of the stored length answer as on the rows twin."""
+    g4, g5 = _store(conn, versioned)
+    conn.execute("UPDATE tgsis.md_vertex SET coordinate = coordinate[1:3] WHERE geoid = %s", (g5,))
+    conn.execute("UPDATE tgsis.gmap_vertex SET coordinate = coordinate || ARRAY[-0.0] WHERE geoid = %s", (g4,))
+    conn.commit()
+    stored, problems = _rows(conn), _checked(conn, g4, g5)
+    assert {r[0] for r in problems} == {g4, g5}, problems
+
+    def other_length() -> None:  # a write keeping the object's stored length
+        conn.execute("UPDATE tgsis.md_vertex SET coordinate = %s WHERE geoid = %s AND vrtxid = 2", ([*ODD], g5))
+        conn.execute("UPDATE tgsis.gmap_vertex SET coordinate = %s WHERE geoid = %s AND nodeid = 1", ([*ODD, 1.0], g4))
+
+    def repair() -> None:  # every point given its embedding's length
+        conn.execute("UPDATE tgsis.md_vertex SET coordinate = coordinate || ARRAY[0.0] WHERE geoid = %s", (g5,))
+        conn.execute("UPDATE tgsis.gmap_vertex SET coordinate = coordinate[1:3] WHERE geoid = %s", (g4,))
+
+    twin = {}
+    for name, write in (("other length", other_length), ("repair", repair)):
+        write()
+        twin[name] = (_rows(conn), _checked(conn, g4, g5))
+        conn.rollback()
+    assert all("refresh_geometry" in p[1] for p in twin["repair"][1]), twin["repair"][1]  # the lengths mended
+    _switch(conn, "chunks", POINTS)
+    assert _rows(conn) == stored and _checked(conn, g4, g5) == problems
+    assert conn.execute(
+        "SELECT DISTINCT array_length(c.coordinate, 2), g.embedding FROM tgsis.md_vertex_chunk c"
+        " JOIN tgsis.md_gmap g USING (geoid) WHERE geoid = %s",
+        (g5,),
+    ).fetchall() == [(3, 4)]
+    conn.commit()
+    for name, write in (("other length", other_length), ("repair", repair)):
+        write()
+        assert (_rows(conn), _checked(conn, g4, g5)) == twin[name], name
+        conn.rollback()
+    _switch(conn, "rows", POINTS)
+    assert _rows(conn) == stored

@@ -60,7 +60,9 @@
 -- the rows of a 2-D array and read back by their ordinality, and the merged
 -- chunk's points aggregated as the rows of its 2-D array (m NULLs at a hole,
 -- m the chunk's); a point of no coordinates, or not of the length of the
--- chunk's other points, is refused by name (TG100) before anything is locked.
+-- chunk's other points that the chunk keeps (a chunk whose every point is
+-- rewritten takes the new length, as the row table would store it), is
+-- refused by name (TG100) before anything is locked.
 -- The callers take the objects' write locks and note the changed objects
 -- (tgsis.object_write_lock, tgsis.note_changed_objects), as they do for rows.
 -- A double precision key (model 2's times) is compared by the float8 =
@@ -310,18 +312,31 @@ BEGIN
     END IF;
 
     -- a point (role 'point') is a row of its chunk's 2-D array: every point written into a chunk has the length of
-    -- the chunk's others, or of another chunk of the object when the chunk is new (m, the object's embedding),
-    -- and at least one coordinate; refused by name (TG100), as the
-    -- switch refuses such an object (tgsis.store_in_chunks), before anything is locked or written
+    -- the chunk's others that it keeps (present slots neither rewritten nor deleted by these rows), or of another
+    -- chunk of the object when the chunk is new (m, the object's embedding), and at least one coordinate; refused by
+    -- name (TG100), as the switch refuses such an object (tgsis.store_in_chunks), before anything is locked or
+    -- written. A chunk whose every point is rewritten takes the written points' length: an object whose points are
+    -- all of one other length than its embedding (as the row table holds them, tgsis.check_geometry reports them)
+    -- is mended through the face as on rows
     FOREACH v_missing IN ARRAY v_pts LOOP
         EXECUTE format(
             'SELECT format(%1$L, concat_ws(%2$L, %3$s), n.id, n.lo, n.hi, v.m)
-               FROM (SELECT %4$s, min(r.%5$I) AS id, min(coalesce(cardinality(r.%6$I), 0)) AS lo,
-                            max(coalesce(cardinality(r.%6$I), 0)) AS hi
-                       FROM %7$s r WHERE NOT r._delete GROUP BY %8$s) n
-               LEFT JOIN LATERAL (SELECT array_length(c.%6$I, 2) AS m FROM %9$s c WHERE %10$s AND %11$s
+               FROM (SELECT %4$s, min(r.%5$I) FILTER (WHERE NOT r._delete) AS id,
+                            min(coalesce(cardinality(r.%6$I), 0)) FILTER (WHERE NOT r._delete) AS lo,
+                            max(coalesce(cardinality(r.%6$I), 0)) FILTER (WHERE NOT r._delete) AS hi,
+                            array_agg(DISTINCT r.%5$I) AS ids
+                       FROM %7$s r GROUP BY %8$s) n
+               LEFT JOIN LATERAL (SELECT array_length(c.%6$I, 2) AS m,
+                                         -- the chunk itself keeps a point these rows leave (its present slots, 1-based,
+                                         -- below its last present one but the holes, outnumber those written here)
+                                         c.chunk <> n.chunk
+                                         OR array_length(c.%6$I, 1) - coalesce(cardinality(c.holes), 0)
+                                            > (SELECT count(*) FROM unnest(n.ids) AS i
+                                                WHERE i - (n.chunk << %13$s) + 1 <= array_length(c.%6$I, 1)
+                                                  AND NOT (i - (n.chunk << %13$s) + 1) = ANY (coalesce(c.holes, %14$L))) AS kept
+                                    FROM %9$s c WHERE %10$s AND %11$s
                                    ORDER BY c.chunk = n.chunk DESC LIMIT 1) v ON true
-              WHERE n.lo = 0 OR n.lo <> n.hi OR n.lo <> v.m
+              WHERE n.lo = 0 OR n.lo <> n.hi OR (v.kept AND n.lo <> v.m)
               ORDER BY %12$s LIMIT 1',
             '(%s), from id %s: points of %s to %s coordinates, the chunk''s others %s', ', ',
             (SELECT string_agg(format('n.%I', k), ', ' ORDER BY o) FROM unnest(v_keys) WITH ORDINALITY AS u(k, o)),
@@ -333,7 +348,8 @@ BEGIN
             -- (the chunk's visible version, else another of the object's: a new chunk takes the object's m)
             array_to_string(ARRAY(SELECT format('c.%1$I = n.%1$I', k) FROM unnest(v_keys) AS k), ' AND '),
             v_vis,
-            array_to_string(ARRAY(SELECT format('n.%I', k) FROM unnest(v_keys) AS k) || 'n.chunk'::text, ', '))
+            array_to_string(ARRAY(SELECT format('n.%I', k) FROM unnest(v_keys) AS k) || 'n.chunk'::text, ', '),
+            v_shift, '{}')
            INTO v_problem USING v_set;
         IF v_problem IS NOT NULL THEN
             RAISE EXCEPTION 'cannot write these rows into %: the points of a chunk are not all of one length', v_name

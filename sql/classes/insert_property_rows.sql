@@ -21,7 +21,12 @@
 -- rows through its face (each touched chunk written once, at the statement's
 -- end) when the class is unversioned; versioned, it is refused by name
 -- (TG103: no writer of chunks makes the chunk versions of every revision;
--- the HINT says to go by rows). Returns the geometries and the rows
+-- the HINT says to go by rows). The face is written as from DEFAULT's
+-- working revision whatever the session's version or viewed revision
+-- (settings tgsis.version and tgsis.revision cleared for that INSERT and
+-- put back after it): the rows made are the table's one state, which every
+-- version reads, as the rows path's direct INSERT into the plain table
+-- writes them from any version (the face would refuse TG305). Returns the geometries and the rows
 -- (vertices or cells, not row versions) given. Runs as its callers (tgsis's
 -- owner).
 CREATE FUNCTION tgsis.insert_property_rows(p_class tgsis.catalog, p_table text, p_geoids bigint[], p_columns text[],
@@ -41,6 +46,8 @@ DECLARE
     v_source   text;
     v_selects  text[] := '{}';
     v_source_versioned boolean;
+    v_version  text;
+    v_viewing  text;
 BEGIN
     features := 0;
     rows := 0;
@@ -89,6 +96,13 @@ BEGIN
                                          tgsis.storage_row_versions('tgsis', v_source),
                                          CASE WHEN v_source_versioned AND NOT v_versioned THEN ' AND NOT s.revclosed' ELSE '' END);
     END LOOP;
+    IF v_chunked THEN
+        -- the face checks the session's version (TG305 outside DEFAULT's working revision), the rows path does not:
+        -- write as DEFAULT's working revision, whose one state every version reads, and put the settings back
+        v_version := current_setting('tgsis.version', true);
+        v_viewing := current_setting('tgsis.revision', true);
+        PERFORM set_config('tgsis.version', '', true), set_config('tgsis.revision', '', true);
+    END IF;
     EXECUTE format('WITH made AS (INSERT INTO %s (_geoid, _idx%s%s) SELECT r.* %s FROM (%s) AS r RETURNING _geoid, _idx)
                     SELECT count(DISTINCT _geoid), count(DISTINCT (_geoid, _idx)) FROM made',
                    -- in chunks (unversioned): through the face, whose trigger writes each touched chunk once
@@ -99,8 +113,12 @@ BEGIN
                    (SELECT string_agg(', ' || v, '') FROM unnest(p_values) AS v),
                    array_to_string(v_selects, ' UNION ALL '))
        INTO features, rows USING p_geoids;
+    IF v_chunked THEN
+        PERFORM set_config('tgsis.version', coalesce(v_version, ''), true),
+                set_config('tgsis.revision', coalesce(v_viewing, ''), true);
+    END IF;
 END
 $$;
 
 COMMENT ON FUNCTION tgsis.insert_property_rows(tgsis.catalog, text, bigint[], text[], text[]) IS
-    'insert one row per vertex or cell of the given geometries into a vertex or cell property table of a static class (copying the revision and lastrevs of each vertex or simplex row version when versioned), the columns given set to the SQL expressions given (a table stored in chunks through its face when unversioned); returns the geometries and rows given; TG103 for models keyed by time or cell level, and for a versioned table stored in chunks';
+    'insert one row per vertex or cell of the given geometries into a vertex or cell property table of a static class (copying the revision and lastrevs of each vertex or simplex row version when versioned), the columns given set to the SQL expressions given (a table stored in chunks through its face when unversioned, written as from DEFAULT''s working revision whatever the session''s version, as the rows path writes); returns the geometries and rows given; TG103 for models keyed by time or cell level, and for a versioned table stored in chunks';
