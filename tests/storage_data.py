@@ -71,3 +71,12 @@ def answer(conn: Conn, statement: str, name: str) -> tuple[Any, ...]:
             )
         )
     return ("written",)
+
+
+def tables_as_rows(conn: Conn, tables: tuple[str, ...]) -> None:
+    """Each model table ``tgsis.<t>`` of ``tables`` stored as rows (``tgsis.store_in_rows``, last first), committed:
+    where a test that switches them itself starts, whatever ``TGSIS_TEST_TIME_STORAGE`` made them."""
+    for table in reversed(tables):
+        if conn.execute("SELECT tgsis.stored_in_chunks(%s)", (table,)).fetchone() == (True,):
+            conn.execute("SELECT tgsis.store_in_rows(%s)", (table,))
+    conn.commit()

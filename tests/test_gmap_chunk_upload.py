@@ -23,6 +23,7 @@ import pytest
 
 import tgsis
 from tests.gmaps_shapes import grid
+from tests.storage_data import tables_as_rows
 from tests.test_gmap_chunks import TABLES, _switch
 from tests.test_gmap_multidim import _class as _md_class
 from tests.test_gmap_multidim import _interpretations
@@ -41,10 +42,7 @@ Conn = psycopg.Connection[Any]
 @pytest.fixture(autouse=True)
 def _gmaps_as_rows(conn: Conn) -> None:
     """The G-map tables as rows at each test's start, whatever TGSIS_TEST_TIME_STORAGE made them."""
-    for table in reversed(TABLES):
-        if conn.execute("SELECT tgsis.stored_in_chunks(%s)", (table,)).fetchone() == (True,):
-            conn.execute("SELECT tgsis.store_in_rows(%s)", (table,))
-    conn.commit()
+    tables_as_rows(conn, TABLES)
 
 
 def _moebius() -> gmaps.GMap:

@@ -20,6 +20,7 @@ import pytest
 
 import tgsis
 from tests.merge_data import sqlstate
+from tests.storage_data import tables_as_rows
 from tests.test_gmap_chunks import _answers, _store
 
 Conn = psycopg.Connection[Any]
@@ -40,10 +41,7 @@ ODD = (-0.0, 5e-324, struct.unpack("<d", struct.pack("<Q", 0x7FF8_0000_0000_0ABC
 @pytest.fixture(autouse=True)
 def _gmaps_as_rows(conn: Conn) -> None:
     """The G-map tables as rows at each test's start, whatever TGSIS_TEST_TIME_STORAGE made them."""
-    for table in reversed(TABLES):
-        if conn.execute("SELECT tgsis.stored_in_chunks(%s)", (table,)).fetchone() == (True,):
-            conn.execute("SELECT tgsis.store_in_rows(%s)", (table,))
-    conn.commit()
+    tables_as_rows(conn, TABLES)
 
 
 def _switch(conn: Conn, to: str, tables: tuple[str, ...] = TABLES) -> None:

@@ -20,6 +20,7 @@ import psycopg
 import pytest
 
 import tgsis
+from tests.storage_data import tables_as_rows
 from tests.test_gmap_chunk_upload import _bits, _maps
 from tests.test_gmap_multidim import _class as _md_class
 from tests.test_gmap_storage import _class as _gmap_class
@@ -42,10 +43,7 @@ KEYS = {"md_vertex": "chunk, revision", "gmap_vertex": "timem, timet, chunk, rev
 @pytest.fixture(autouse=True)
 def _gmaps_as_rows(conn: Conn) -> None:
     """The G-map tables as rows at each test's start, whatever TGSIS_TEST_TIME_STORAGE made them."""
-    for table in reversed(TABLES):
-        if conn.execute("SELECT tgsis.stored_in_chunks(%s)", (table,)).fetchone() == (True,):
-            conn.execute("SELECT tgsis.store_in_rows(%s)", (table,))
-    conn.commit()
+    tables_as_rows(conn, TABLES)
 
 
 def _switch(conn: Conn, tables: tuple[str, ...] = TABLES) -> None:
