@@ -181,22 +181,33 @@ def assert_nothing_shared(states: dict[str, MeshState]) -> None:
 # ---------------------------------------------------------------- random edits, as SQL users make them
 
 
-EDIT = st.one_of(
-    st.tuples(
+#: each kind of edit, apart: a test that leaves kinds out draws from the others (no filter: Hypothesis's
+#: filter_too_much health check failed a run that filtered the atom edits out)
+EDIT_KINDS = {
+    "move": st.tuples(
         st.just("move"), st.lists(st.integers(0, 10_000), min_size=1, max_size=6), st.sampled_from([0.5, -1.25, 3.0e-7])
     ),
-    st.tuples(
+    "vertex value": st.tuples(
         st.just("vertex value"), st.lists(st.integers(0, 10_000), min_size=1, max_size=4), st.floats(-1, 1, width=32)
     ),
-    st.tuples(st.just("cell value"), st.lists(st.integers(0, 10_000), min_size=1, max_size=4), st.integers(-9, 9)),
-    st.tuples(st.just("remove vertices"), st.lists(st.integers(0, 10_000), min_size=1, max_size=3), st.just(0)),
-    st.tuples(st.just("remove cells"), st.lists(st.integers(0, 10_000), min_size=1, max_size=4), st.just(0)),
-    st.tuples(st.just("add vertices"), st.lists(st.integers(0, 10_000), min_size=1, max_size=3), st.just(0)),
-    st.tuples(st.just("add cells"), st.lists(st.integers(0, 10_000), min_size=3, max_size=3), st.just(0)),
-    st.tuples(st.just("atom"), st.lists(st.integers(0, 10_000), min_size=2, max_size=2), st.just(0)),
-    st.tuples(st.just("parts"), st.lists(st.integers(0, 10_000), min_size=1, max_size=1), st.just(0)),
-    st.tuples(st.just("freeze"), st.just([0]), st.just(0)),
-)
+    "cell value": st.tuples(
+        st.just("cell value"), st.lists(st.integers(0, 10_000), min_size=1, max_size=4), st.integers(-9, 9)
+    ),
+    "remove vertices": st.tuples(
+        st.just("remove vertices"), st.lists(st.integers(0, 10_000), min_size=1, max_size=3), st.just(0)
+    ),
+    "remove cells": st.tuples(
+        st.just("remove cells"), st.lists(st.integers(0, 10_000), min_size=1, max_size=4), st.just(0)
+    ),
+    "add vertices": st.tuples(
+        st.just("add vertices"), st.lists(st.integers(0, 10_000), min_size=1, max_size=3), st.just(0)
+    ),
+    "add cells": st.tuples(st.just("add cells"), st.lists(st.integers(0, 10_000), min_size=3, max_size=3), st.just(0)),
+    "atom": st.tuples(st.just("atom"), st.lists(st.integers(0, 10_000), min_size=2, max_size=2), st.just(0)),
+    "parts": st.tuples(st.just("parts"), st.lists(st.integers(0, 10_000), min_size=1, max_size=1), st.just(0)),
+    "freeze": st.tuples(st.just("freeze"), st.just([0]), st.just(0)),
+}
+EDIT = st.one_of(*EDIT_KINDS.values())
 
 
 def _ids(conn: Conn, table: str, key: str, geoid: int) -> list[int]:
