@@ -482,7 +482,12 @@ def test_the_tables_own_indexes_come_back_by_name(conn: Conn, versioned: bool) -
     F.insert_feature(conn, "indexed", _surface(5))
     if versioned:
         tgsis.enable_feature_versioning(conn)
-    for index, definition in (("indexed_grade_idx", "(grade)"), ("indexed_facies_idx", "(facies) WHERE facies > 0")):
+    odd = "indexed ON public.indexed_simplexpros USING x"  # a quoted name holding what a definition's head holds
+    for index, definition in (
+        ("indexed_grade_idx", "(grade)"),
+        ("indexed_facies_idx", "(facies) WHERE facies > 0"),
+        (odd, "(grade DESC, facies)"),
+    ):
         conn.execute(
             sql.SQL("CREATE INDEX {} ON {} ").format(
                 sql.Identifier(index),
@@ -494,7 +499,7 @@ def test_the_tables_own_indexes_come_back_by_name(conn: Conn, versioned: bool) -
         )
     conn.commit()
     before = _user_indexes(conn, "indexed")
-    assert {"indexed_grade_idx", "indexed_facies_idx"} <= {name for name, _ in before}
+    assert {"indexed_grade_idx", "indexed_facies_idx", odd} <= {name for name, _ in before}
     conn.execute("SELECT tgsis.store_class_in_chunks('indexed')")
     conn.commit()
     assert _kinds(conn, "indexed")[3]  # the other table in chunks: its row storage gone, the indexes kept aside

@@ -22,7 +22,7 @@ DECLARE
     v_n     integer := 0;
 BEGIN
     FOR v_idx IN
-        SELECT i.indexrelid::regclass AS idx, c.relname AS name, pg_get_indexdef(i.indexrelid) AS def
+        SELECT i.indexrelid::regclass AS idx, c.relname AS name, i.indisunique AS uniq, pg_get_indexdef(i.indexrelid) AS def
           FROM pg_index i
           JOIN pg_class c ON c.oid = i.indexrelid
          WHERE i.indrelid = p_from AND NOT i.indisprimary
@@ -42,12 +42,13 @@ BEGIN
                                         OR NOT (a.attname IN ('geoid', 'times', 'timem') OR a.attname ~ '^(vrtxid|nodeid)[0-9]+$')))
          ORDER BY c.relname
     LOOP
-        -- the definition's table, as pg_get_indexdef writes it (schema-qualified; ON ONLY for a partitioned one)
-        v_on := format(' ON %s USING ', p_from);
-        v_at := strpos(v_idx.def, v_on);
+        -- the definition's head, as pg_get_indexdef writes it: CREATE [UNIQUE] INDEX <name> ON [ONLY] <table,
+        -- schema-qualified> USING ... (matched whole from the start: a quoted name may hold any text)
+        v_on := format('CREATE %sINDEX %I ON %s USING ', CASE WHEN v_idx.uniq THEN 'UNIQUE ' ELSE '' END, v_idx.name, p_from);
+        v_at := CASE WHEN starts_with(v_idx.def, v_on) THEN 1 ELSE 0 END;
         IF v_at = 0 THEN
-            v_on := format(' ON ONLY %s USING ', p_from);
-            v_at := strpos(v_idx.def, v_on);
+            v_on := format('CREATE %sINDEX %I ON ONLY %s USING ', CASE WHEN v_idx.uniq THEN 'UNIQUE ' ELSE '' END, v_idx.name, p_from);
+            v_at := CASE WHEN starts_with(v_idx.def, v_on) THEN 1 ELSE 0 END;
         END IF;
         IF v_at = 0 THEN
             RAISE EXCEPTION 'the index % of % cannot be moved to %', v_idx.idx, p_from, p_to
@@ -56,7 +57,8 @@ BEGIN
                       HINT = 'Report this as a bug of tgsis; drop the index, switch the storage, and create it again.';
         END IF;
         EXECUTE format('DROP INDEX %s', v_idx.idx);
-        EXECUTE left(v_idx.def, v_at - 1) || format(' ON %s USING ', p_to) || substr(v_idx.def, v_at + length(v_on));
+        EXECUTE format('CREATE %sINDEX %I ON %s USING ', CASE WHEN v_idx.uniq THEN 'UNIQUE ' ELSE '' END, v_idx.name, p_to)
+                || substr(v_idx.def, length(v_on) + 1);
         v_n := v_n + 1;
     END LOOP;
     RETURN v_n;
