@@ -14,6 +14,7 @@ RETURNS integer
 LANGUAGE plpgsql
 VOLATILE
 SET search_path = pg_catalog, pg_temp
+SET extra_float_digits = 1  -- a float constant of a partial index's predicate deparsed exactly, whatever the session's
 AS $$
 DECLARE
     v_idx   record;
