@@ -29,7 +29,16 @@ figures are printed beside: bytes per vertex, the download and upload
 against the ``bytea`` row, and one vertex read by key through the view
 ``tgsis.vrtx`` (what a psql user types) and through ``tgsis.vertex``.
 
+The class's property table is stored in chunks by default
+(``--property-storage chunks``: ``tgsis.store_class_in_chunks`` on the new,
+empty class before the upload, unless the class is in chunks already, as
+the flip of a static class's default makes it) or as rows
+(``--property-storage rows``: ``tgsis.store_class_in_rows`` if the class was
+made in chunks). The upload and download then move the property's chunks
+whole (docs/storage.md, "The bulk paths of property chunks").
+
     python bench/peers.py [--side 1000] [--repeat 3] [--versioned] [--storage chunks|rows]
+        [--property-storage chunks|rows]
 """
 
 from __future__ import annotations
@@ -70,6 +79,12 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--versioned", action="store_true", help="feature versioning on (rows go to _ver storage)")
     parser.add_argument("--storage", choices=("chunks", "rows"), default="chunks", help="model 1's storage")
+    parser.add_argument(
+        "--property-storage",
+        choices=("chunks", "rows"),
+        default="chunks",
+        help="the class's property table: chunks (store_class_in_chunks) or rows",
+    )
     args = parser.parse_args()
 
     surface = grid_surface(args.side)
@@ -86,6 +101,12 @@ def main() -> None:
         conn.execute("CREATE EXTENSION postgis")
         print("PostGIS", conn.execute("SELECT postgis_lib_version()").fetchone()[0])  # type: ignore[index]
         F.create_feature_class(conn, "horizon", "SURFACE", cell_properties={"porosity": "double precision"})
+        conn.commit()
+        in_chunks = V.storage_table(conn, "public", "horizon_cellpros") != "public.horizon_cellpros"
+        if args.property_storage == "chunks" and not in_chunks:
+            conn.execute("SELECT tgsis.store_class_in_chunks('horizon')")
+        elif args.property_storage == "rows" and in_chunks:
+            conn.execute("SELECT tgsis.store_class_in_rows('horizon')")
         if args.versioned:
             tgsis.enable_feature_versioning(conn)
         conn.commit()
@@ -94,7 +115,7 @@ def main() -> None:
             V.storage_table(conn, s, t)
             for s, t in (("tgsis", "vrtx"), ("tgsis", "trgl"), ("public", "horizon_cellpros"))
         ]
-        print("storage:", ", ".join(tables))
+        print("storage:", ", ".join(tables), f"(property: {args.property_storage})")
         conn.execute("CREATE TABLE tin_peer (id int PRIMARY KEY, geom geometry(TINZ))")
         conn.execute("CREATE TABLE bytea_peer (id int PRIMARY KEY, vertices bytea, triangles bytea, porosity bytea)")
         for column in ("vertices", "triangles", "porosity"):  # the raw bytes: out of line, not compressed
@@ -278,6 +299,8 @@ def main() -> None:
     print(f"one_vertex_by_function_ms: {keyed[1] * 1e3:.3f}")
     print(f"bytes_per_vertex: {tgsis_bytes / n:.1f}")
     print(f"bytes_per_vertex_without_property: {sum(stored[t][0] for t in tables[:2]) / n:.1f}")
+    print(f"property_storage: {args.property_storage}")
+    print(f"property_bytes_per_vertex: {stored[tables[2]][0] / n:.1f}")
     print(f"upload_vs_bytea: {ups[0] / ups[2]:.2f}")
 
 

@@ -125,6 +125,22 @@ def test_doubles_keep_their_bits() -> None:
     assert_same_rows(ids, cols, via_copy(chunks).rows())
 
 
+def test_an_object_without_holes_round_trips_whole_and_beside_chunks_with_holes() -> None:
+    """Every chunk full (the usual upload): each column is taken whole; one chunk with holes among them: by mask."""
+    rng = np.random.default_rng(7)
+    n = 3 * 1024 + 100  # three full chunks and a partial last one, no hole
+    ids = np.arange(n, dtype=np.int64)
+    values = np.resize(np.concatenate([ODD_BITS, -ODD_BITS, rng.normal(size=50)]), n)
+    cols = {"x": values, "y": np.roll(values, 5), "z": values[::-1].copy()}
+    cells = np.stack([ids % 997, (ids * 7) % 1009, (ids * 13) % 1013], axis=1)
+    corners = {f"vrtxid{i + 1}": cells[:, i] for i in range(3)}
+    for keep in (np.ones(n, dtype=bool), ids != 1024 + 5):  # dense; chunk 1 with a hole among dense chunks
+        chunks = via_copy(encode(ids[keep], {c: v[keep] for c, v in cols.items()}, XYZ))
+        assert_same_rows(ids[keep], {c: v[keep] for c, v in cols.items()}, chunks.rows())
+        triangles = via_copy(encode(ids[keep], {c: v[keep] for c, v in corners.items()}, TRGL))
+        assert_same_rows(ids[keep], {c: v[keep] for c, v in corners.items()}, triangles.rows())
+
+
 def test_relative_corners_and_vbase() -> None:
     ids = np.arange(3, dtype=np.int64) + 1024
     cells = np.array([[10, 11, 12], [9, 13, 11], [20, 3, 30]], dtype=np.int64)

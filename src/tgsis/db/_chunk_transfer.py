@@ -30,6 +30,7 @@ Private to ``tgsis.db``.
 from __future__ import annotations
 
 import concurrent.futures
+import struct
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, cast
@@ -703,24 +704,30 @@ def records_as_copy(data: bytes, count: int) -> bytes:
     view = memoryview(data)
     out: list[Any] = [COPY_SIGNATURE + bytes(8)]  # flags 0, no header extension
     pos = 0
+    size = len(view)
+    unpack = _INT4.unpack_from  # a few times faster than int.from_bytes of a slice, per value
     try:
         for _ in range(count):
-            fields = int.from_bytes(view[pos : pos + 4], "big", signed=True)
+            (fields,) = unpack(view, pos)
             out.append(fields.to_bytes(2, "big", signed=True))
             pos += 4
             for _ in range(fields):
-                length = int.from_bytes(view[pos + 4 : pos + 8], "big", signed=True)
+                (length,) = unpack(view, pos + 4)
                 end = pos + 8 + max(length, 0)
-                if end > len(view):
+                if end > size:
                     raise IndexError
                 out.append(view[pos + 4 : end])
                 pos = end
-    except (IndexError, OverflowError):
+    except (IndexError, OverflowError, struct.error):
         raise InvalidInputError("chunk records end inside a record") from None
     if pos != len(view):
         raise InvalidInputError(f"{len(view) - pos} bytes after {count} chunk records")
     out.append(b"\xff\xff")
     return b"".join(out)
+
+
+#: a big-endian int4 (the counts and lengths of record_send values)
+_INT4 = struct.Struct(">i")
 
 
 # --------------------------------------------------------------------------- the time tables of models 2 and 3
