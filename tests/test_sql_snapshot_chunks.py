@@ -133,7 +133,8 @@ def test_vertices_at_on_the_arrays_gives_the_rows_bits(conn: Conn, versioned: bo
     assert conn.execute("SELECT to_regclass('tgsis.d4dvrtx_arrays')").fetchone() == (None,)
     assert not _arrays_read(conn, geoid, 0.5)
     _switch(conn, "chunks")
-    assert _arrays_read(conn, geoid, 0.5) and _arrays_read(conn, geoid, 2.0)  # between two instants, at one
+    assert _arrays_read(conn, geoid, 0.5) and _arrays_read(conn, geoid, 4.75)  # between two instants
+    assert not _arrays_read(conn, geoid, 2.0)  # at one: the face's single scan (as fast, no function's result set)
     assert _answers(conn, geoid) == on_rows
     # edits on chunks (holes written into the chunks by the face), compared with the rows after the way back
     _edit(conn, geoid, first[0] + 1030)
