@@ -161,3 +161,20 @@ def test_a_reader_without_the_arrays_reads_the_face(db_dsn: str, conn: Conn) -> 
         conn.commit()
         assert not _arrays_read(reader, geoid, 0.5)  # the face's join instead, not 42501
         assert _answers(reader, geoid) == expected
+
+
+def test_partitioning_model_3_keeps_the_arrays(conn: Conn) -> None:
+    """tgsis.partition_model_storage hash-partitions d4dvrtx's chunk table: the arrays view is made again over it
+    (it would otherwise be another user of the chunk table, TG202)."""
+    tgsis.create_feature_class(conn, "evolving", "SURFACE", time_model="EVOLVING")
+    conn.commit()
+    geoid = _insert(conn)
+    on_rows = _answers(conn, geoid)
+    _switch(conn, "chunks")
+    tgsis.partition_model_storage(conn, 3, 2)
+    conn.commit()
+    assert conn.execute(
+        "SELECT c.relkind FROM pg_class c WHERE c.oid = 'tgsis.d4dvrtx_chunk'::regclass"
+    ).fetchone() == ("p",)
+    assert _arrays_read(conn, geoid, 0.5)
+    assert _answers(conn, geoid) == on_rows
