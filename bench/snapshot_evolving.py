@@ -17,6 +17,16 @@ default). Timed in one process and database (medians, in turn):
    rows, ``tgsis.vertices_at``), switched in this process by replacing those
    functions; each against the static download in the same run.
 
+The SQL snapshot too (what psql users read: every row of
+``SELECT * FROM tgsis.vertices_at(geoid, t)`` fetched in binary), against
+``tgsis.vertices_at`` of the static surface (its ``vrtx`` face) in the same
+run: on rows; on chunks, where ``vertices_at`` between two instants
+interpolates the aligned chunk arrays (``tgsis.d4dvrtx_arrays``,
+``tgsis.evolving_chunk_vertices``; at an instant it reads the face), and, as
+before it, the join of two instants of the face (``FACE_JOIN``, the rows'
+branch of ``vertices_at``, run as text). Their answers are compared bit for bit
+first.
+
 Every snapshot is checked against the surface first (bit for bit: same_as).
 
     python bench/snapshot_evolving.py [--side 1000] [--repeat 3] [--no-faces-upload]   # TGSIS_PG=system|embedded
@@ -40,6 +50,25 @@ import tgsis
 from tgsis.temporal import EvolvingSurface, TopologyPeriod
 
 Conn = psycopg.Connection[Any]
+
+
+#: model 3's branch of tgsis.vertices_at before the arrays (and on rows): two instants of the face joined on nodeid
+FACE_JOIN = """
+    WITH f AS MATERIALIZED (SELECT * FROM tgsis.evolving_frame(%(g)s, %(t)s))
+    SELECT a.nodeid, a.x + (SELECT f.w FROM f) * (b.x - a.x), a.y + (SELECT f.w FROM f) * (b.y - a.y),
+           a.z + (SELECT f.w FROM f) * (b.z - a.z)
+      FROM tgsis.d4dvrtx a
+      JOIN tgsis.d4dvrtx b ON b.nodeid = a.nodeid
+     WHERE a.geoid = %(g)s AND a.timem = (SELECT f.timem FROM f) AND a.timet = (SELECT f.t0 FROM f)
+       AND b.geoid = %(g)s AND b.timem = (SELECT f.timem FROM f) AND b.timet = (SELECT f.t1 FROM f)
+       AND (SELECT f.t0 < f.t1 FROM f)
+    UNION ALL
+    SELECT a.nodeid, a.x, a.y, a.z
+      FROM tgsis.d4dvrtx a
+     WHERE a.geoid = %(g)s AND a.timem = (SELECT f.timem FROM f) AND a.timet = (SELECT f.t0 FROM f)
+       AND (SELECT f.t0 = f.t1 FROM f)
+"""
+VERTICES_AT = "SELECT * FROM tgsis.vertices_at(%(g)s, %(t)s)"
 
 
 @contextlib.contextmanager
@@ -115,6 +144,22 @@ def main() -> None:
 
             return run
 
+        def sql_rows(key: str, t: float, query: str) -> list[Any]:
+            with conn.cursor(binary=True) as cursor:
+                rows = cursor.execute(query, {"g": ids[key], "t": t}).fetchall()
+            conn.commit()
+            return rows
+
+        def sql(key: str, t: float, query: str = VERTICES_AT) -> Callable[[], object]:
+            return lambda: sql_rows(key, t, query)
+
+        def sql_check(key: str, faces: bool) -> None:
+            for t in expected:
+                got = sorted(sql_rows(key, t, VERTICES_AT))
+                assert len(got) == static.n_vertices, (key, t)
+                if faces:
+                    assert got == sorted(sql_rows(key, t, FACE_JOIN)), (key, t)  # bit for bit: the doubles' bytes
+
         def static_down() -> None:
             tgsis.fetch_feature(conn, "static_grid", ids["static"])
             conn.commit()
@@ -123,8 +168,18 @@ def main() -> None:
         up_rows = once(lambda: upload("rows", "evolving_grid", surface))
         vacuum()
         check("rows")
-        static_rows, at_rows, mid_rows = paired(
-            [static_down, snapshot("rows", 1.0, False), snapshot("rows", 0.5, False)], args.repeat
+        sql_check("rows", True)
+        rows_answers = {t: sorted(sql_rows("rows", t, VERTICES_AT)) for t in expected}
+        static_rows, at_rows, mid_rows, sql_static_rows, sql_at_rows, sql_mid_rows = paired(
+            [
+                static_down,
+                snapshot("rows", 1.0, False),
+                snapshot("rows", 0.5, False),
+                sql("static", 0.5),
+                sql("rows", 1.0),
+                sql("rows", 0.5),
+            ],
+            args.repeat,
         )
 
         conn.execute("SELECT tgsis.store_in_chunks('d4dtrgl'), tgsis.store_in_chunks('d4dvrtx')")
@@ -137,13 +192,31 @@ def main() -> None:
         vacuum()
         for key in ids.keys() - {"static"}:  # the figures are of correct snapshots, and every upload stored the same
             check(key)
-        static_chunks, at_chunks, mid_chunks, at_faces, mid_faces = paired(
+            sql_check(key, True)
+            assert {t: sorted(sql_rows(key, t, VERTICES_AT)) for t in expected} == rows_answers, key
+        (
+            static_chunks,
+            at_chunks,
+            mid_chunks,
+            at_faces,
+            mid_faces,
+            sql_static_chunks,
+            sql_at_chunks,
+            sql_mid_chunks,
+            sql_at_faces,
+            sql_mid_faces,
+        ) = paired(
             [
                 static_down,
                 snapshot("chunks", 1.0, False),
                 snapshot("chunks", 0.5, False),
                 snapshot("chunks", 1.0, True),
                 snapshot("chunks", 0.5, True),
+                sql("static", 0.5),
+                sql("chunks", 1.0),
+                sql("chunks", 0.5),
+                sql("chunks", 1.0, FACE_JOIN),
+                sql("chunks", 0.5, FACE_JOIN),
             ],
             args.repeat,
         )
@@ -167,6 +240,18 @@ def main() -> None:
         ("get_at between instants, chunks via faces", mid_faces, static_chunks),
     ):
         print(f"{name:42s} {value:6.2f} s ({value / base:.2f}x static)")
+    print(f"SQL: vertices_at of the static surface, run 1 / 2:   {sql_static_rows:6.2f} s / {sql_static_chunks:6.2f} s")
+    for name, value, base in (
+        ("SQL vertices_at at an instant, rows", sql_at_rows, sql_static_rows),
+        ("SQL vertices_at between instants, rows", sql_mid_rows, sql_static_rows),
+        ("SQL vertices_at at an instant, chunks", sql_at_chunks, sql_static_chunks),
+        ("SQL vertices_at between instants, arrays", sql_mid_chunks, sql_static_chunks),
+        ("SQL at an instant, face join", sql_at_faces, sql_static_chunks),
+        ("SQL between instants, face join", sql_mid_faces, sql_static_chunks),
+    ):
+        print(f"{name:42s} {value:6.2f} s ({value / base:.2f}x static SQL)")
+    print(f"sql_between_arrays_vs_face_join: {sql_mid_chunks / sql_mid_faces:.2f}")
+    print(f"sql_instant_chunks_vs_face_join: {sql_at_chunks / sql_at_faces:.2f}")
     print(f"static_download_s: {static_chunks:.3f}")
     print(f"snapshot_instant_rows_vs_static: {at_rows / static_rows:.2f}")
     print(f"snapshot_between_rows_vs_static: {mid_rows / static_rows:.2f}")

@@ -55,6 +55,8 @@ DECLARE
     v_dels      text;
     v_flag      text;
     v_seq       text;
+    v_chunkwhere text[];   -- the guard, visibility and rights filter of a chunk version (no slot test)
+    v_arrays    regclass;  -- model 3's node positions as arrays (tgsis.d4dvrtx_arrays), read by tgsis.vertices_at
 BEGIN
     v_chunk := tgsis.chunk_table_of(p_table);  -- TG200 / TG100
     SELECT * INTO v_reg FROM tgsis.chunk_registry(p_table) r;
@@ -92,9 +94,11 @@ BEGIN
                                  'THEN (v.revision = ANY ((SELECT tgsis.get_revisions(true))::integer[])) IS TRUE '
                                  'AND (NOT v.revclosed OR NOT (v.lastrevs && (SELECT tgsis.get_revisions(true)))) '
                                  'ELSE true END', v_reg.schemaname, v_reg.tablename);
+    v_chunkwhere := v_where;  -- the chunk versions' test without the slot's (the arrays view below)
     v_where := v_where || v_dec.present;
     IF v_geoidcol IS NOT NULL THEN
         v_where := v_where || tgsis.class_rights_filter(v_geoidcol, 'SELECT', 'v');
+        v_chunkwhere := v_chunkwhere || tgsis.class_rights_filter(v_geoidcol, 'SELECT', 'v');
     END IF;
     EXECUTE format('CREATE VIEW %I.%I WITH (security_barrier = true) AS SELECT %s FROM %s v%s '
                    'CROSS JOIN LATERAL unnest(%s) WITH ORDINALITY AS u(%s, o) WHERE %s',
@@ -196,6 +200,37 @@ $body$, v_rowfn, v_rows, v_dels, v_seq, v_flag,
     IF v_versioned THEN
         EXECUTE format('CREATE TRIGGER tgsis_versioning_rights BEFORE INSERT OR UPDATE OR DELETE ON %s '
                        'FOR EACH STATEMENT EXECUTE FUNCTION tgsis.view_write_check()', v_face);
+    END IF;
+    -- model 3's node positions (the switch's face, named <table> or <table>_face, not a test's face beside the live
+    -- table under another name): tgsis.d4dvrtx_arrays,
+    -- one row per visible chunk version with its arrays as stored, the face's guard, visibility and rights filter,
+    -- its SELECT grants and owner; tgsis.vertices_at interpolates two instants' aligned chunks slot by slot on it
+    -- (tgsis.evolving_chunk_vertices; docs/storage.md "Snapshots at t"); dropped by tgsis.store_in_rows
+    IF coalesce(p_view, v_reg.tablename) IN (v_reg.tablename, v_reg.tablename || '_face') AND v_reg.classname IS NULL
+       AND v_reg.tablename = 'd4dvrtx' THEN
+        IF to_regclass('tgsis.d4dvrtx_arrays') IS NOT NULL THEN
+            RAISE EXCEPTION 'tgsis.d4dvrtx_arrays exists already'
+                USING ERRCODE = 'TG201', DETAIL = 'The switch of tgsis.d4dvrtx into chunks makes the view tgsis.d4dvrtx_arrays.',
+                      HINT = 'rename or drop that relation, then store the table in chunks again';
+        END IF;
+        EXECUTE format('CREATE VIEW tgsis.d4dvrtx_arrays WITH (security_barrier = true) AS '
+                       'SELECT v.geoid, v.timem, v.timet, v.chunk, v.chunk << %s AS base, v.x, v.y, v.z FROM %s v WHERE %s',
+                       (SELECT round(log(2, r.chunksize))::integer FROM tgsis.chunk_registry(p_table) r), v_chunk,
+                       array_to_string(v_chunkwhere, ' AND '));
+        v_arrays := 'tgsis.d4dvrtx_arrays'::regclass;
+        EXECUTE format('COMMENT ON VIEW %s IS %L', v_arrays,
+                       format('model 3''s node positions stored in chunks (%s): one row per visible chunk version (the face''s '
+                              'guard, visibility and class rights filter), base the id of its first slot, x, y, z its arrays '
+                              '(NULL at a hole); read by tgsis.vertices_at (tgsis.evolving_chunk_vertices), made by the switch '
+                              'into chunks, dropped by the way back', v_chunk));
+        FOR v_acl IN SELECT a.grantee, a.is_grantable FROM pg_class c, aclexplode(c.relacl) AS a
+                      WHERE c.oid = v_face AND a.grantee <> c.relowner AND a.privilege_type = 'SELECT' LOOP
+            EXECUTE format('GRANT SELECT ON %s TO %s%s', v_arrays,
+                           CASE WHEN v_acl.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_acl.grantee)) END,
+                           CASE WHEN v_acl.is_grantable THEN ' WITH GRANT OPTION' ELSE '' END);
+        END LOOP;
+        EXECUTE format('ALTER VIEW %s OWNER TO %I', v_arrays,
+                       (SELECT pg_get_userbyid(c.relowner) FROM pg_class c WHERE c.oid = v_chunk));
     END IF;
     EXECUTE format('ALTER VIEW %s OWNER TO %I', v_face,
                    (SELECT pg_get_userbyid(c.relowner) FROM pg_class c WHERE c.oid = v_chunk));

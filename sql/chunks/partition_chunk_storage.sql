@@ -35,6 +35,7 @@ DECLARE
     v_old       text := 'tgsis_old_' || p_table || '_chunk';
     v_chunk     regclass;
     v_face      regclass;
+    v_keep      regclass[];  -- the views over the chunk table made again over the partitioned one
     v_view      regclass;
     v_kind      "char";
     v_users     text;
@@ -64,7 +65,10 @@ BEGIN
     END IF;
     -- what refers to the chunk table, besides the face and the chunk view (made again over the new one), would
     -- block the swap or be lost; the guards of versioned storage and the insert check are made again
-    v_users := tgsis.relation_users(v_chunk, ARRAY[v_face, v_view],
+    -- (and model 3's arrays for tgsis.vertices_at, tgsis.d4dvrtx_arrays: made again over the new one too)
+    v_keep := ARRAY[v_face, v_view] || ARRAY(SELECT to_regclass('tgsis.d4dvrtx_arrays') WHERE p_table = 'd4dvrtx'
+                                                AND to_regclass('tgsis.d4dvrtx_arrays') IS NOT NULL);
+    v_users := tgsis.relation_users(v_chunk, v_keep,
                                     ARRAY['tgsis_storage_write', 'tgsis_storage_rows', 'tgsis_storage_changes', 'tgsis_chunk_insert']::name[]);
     IF v_users IS NOT NULL THEN
         RAISE EXCEPTION 'tgsis.% is used by other objects', quote_ident(p_table)
@@ -82,7 +86,7 @@ BEGIN
 
     -- the partitioned chunk table in its place, its chunk versions moved and verified, the face and the chunk view
     -- reading it
-    v_n := tgsis.swap_into_hash_partitions(v_chunk, p_partitions, ARRAY[v_face, v_view]);
+    v_n := tgsis.swap_into_hash_partitions(v_chunk, p_partitions, v_keep);
     v_new := format('tgsis.%I', v_name)::regclass;
     PERFORM tgsis.create_chunk_insert_trigger(p_table, v_new);  -- direct inserts checked as before
     IF EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table) THEN

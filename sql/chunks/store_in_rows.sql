@@ -96,6 +96,9 @@ BEGIN
     EXECUTE format('DROP TABLE IF EXISTS %s, %s, %s, %s', tgsis.chunk_face_work(p_table, 'now'),
                    tgsis.chunk_face_work(p_table, 'queue'), tgsis.chunk_face_work(p_table, 'rows'), tgsis.chunk_face_work(p_table, 'dels'));
     EXECUTE format('DROP VIEW %s', v_face);
+    IF p_table = 'd4dvrtx' THEN
+        DROP VIEW IF EXISTS tgsis.d4dvrtx_arrays;  -- model 3's arrays for tgsis.vertices_at (tgsis.create_chunk_face)
+    END IF;
     EXECUTE format('DROP FUNCTION IF EXISTS %I.%I()', 'tgsis', p_table || '_face_row');  -- its row function (tgsis.create_chunk_face)
     EXECUTE format('DROP VIEW %s', tgsis.chunk_relation(p_table, '_chunk_rows'));
     EXECUTE format('DROP TABLE %s', v_chunk);

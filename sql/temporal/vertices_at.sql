@@ -15,20 +15,42 @@
 -- compared as `times = tgsis.instant_at(f.geoid, ...)` under a LATERAL call it
 -- was a filter over the versioned view, run per row of every instant
 -- (tests/test_instant_at_once.py).
+--
+-- Model 3 between two geometry instants with tgsis.d4dvrtx stored in chunks
+-- (the view tgsis.d4dvrtx_arrays exists, made by the switch) and the caller
+-- allowed to read those arrays: tgsis.evolving_chunk_vertices interpolates the
+-- two instants' aligned chunk arrays slot by slot (the same operations, the
+-- same bits) instead of decoding both instants through the face and joining
+-- them; a caller who may read the face but not the arrays, and rows storage,
+-- take the join below (one of the two branches runs, decided once per query by
+-- c). At a geometry instant the face's one scan on either storage: as fast as
+-- the arrays there, without the PL/pgSQL function's result set
+-- (docs/performance.md, "Model 3's SQL snapshot on the arrays").
 CREATE FUNCTION tgsis.vertices_at(p_geoid bigint, p_t double precision, p_convention text DEFAULT 'left')
 RETURNS TABLE (vrtxid bigint, x double precision, y double precision, z double precision)
 LANGUAGE sql
 STABLE
 PARALLEL SAFE
 AS $$
-    WITH f AS MATERIALIZED (SELECT * FROM tgsis.evolving_frame(p_geoid, p_t))
+    WITH f AS MATERIALIZED (SELECT * FROM tgsis.evolving_frame(p_geoid, p_t)),
+    c AS MATERIALIZED (  -- d4dvrtx in chunks and its arrays readable by the caller: model 3 from the arrays
+        SELECT coalesce(has_table_privilege(to_regclass('tgsis.d4dvrtx_arrays'), 'SELECT')
+                        AND has_function_privilege('tgsis.evolving_chunk_vertices(bigint, double precision, double precision, double precision, double precision)',
+                                                   'EXECUTE'), false) AS arrays
+    )
+    SELECT s.vrtxid, s.x, s.y, s.z
+      FROM tgsis.evolving_chunk_vertices(p_geoid, (SELECT f.timem FROM f), (SELECT f.t0 FROM f), (SELECT f.t1 FROM f),
+                                         (SELECT f.w FROM f)) s
+     WHERE (SELECT c.arrays FROM c) AND (SELECT f.t0 < f.t1 FROM f)
+       AND tgsis.checked_convention(p_convention) IS NOT NULL
+    UNION ALL
     SELECT a.nodeid, a.x + (SELECT f.w FROM f) * (b.x - a.x), a.y + (SELECT f.w FROM f) * (b.y - a.y),
            a.z + (SELECT f.w FROM f) * (b.z - a.z)
       FROM tgsis.d4dvrtx a
       JOIN tgsis.d4dvrtx b ON b.nodeid = a.nodeid
      WHERE a.geoid = p_geoid AND a.timem = (SELECT f.timem FROM f) AND a.timet = (SELECT f.t0 FROM f)
        AND b.geoid = p_geoid AND b.timem = (SELECT f.timem FROM f) AND b.timet = (SELECT f.t1 FROM f)
-       AND (SELECT f.t0 < f.t1 FROM f)
+       AND (SELECT f.t0 < f.t1 FROM f) AND (SELECT NOT c.arrays FROM c)
        AND tgsis.checked_convention(p_convention) IS NOT NULL  -- model 3 has no steps, but a bad value is an error
     UNION ALL
     SELECT a.nodeid, a.x, a.y, a.z
