@@ -19,6 +19,7 @@ CREATE FUNCTION tgsis.evolving_chunk_vertices(p_geoid bigint, p_timem double pre
 RETURNS TABLE (vrtxid bigint, x double precision, y double precision, z double precision)
 LANGUAGE plpgsql
 STABLE
+PARALLEL SAFE  -- reads only; tgsis.vertices_at, which calls it, is PARALLEL SAFE
 SET search_path = pg_catalog, pg_temp
 AS $$
 BEGIN
