@@ -117,6 +117,8 @@ DECLARE
     v_st        text;
     v_nu        integer;
     v_i         integer;
+    v_any       boolean;   -- the statement kept rows in v_rows (not only deleted rows)
+    v_multi     boolean;   -- some key has more than one event in the statement
 BEGIN
     SELECT * INTO v_reg FROM tgsis.chunk_registry(v_table) r;
     v_objclass := coalesce((SELECT t.objectclass FROM tgsis.model_tables t WHERE t.tablename = v_reg.tablename AND v_reg.classname IS NULL),
@@ -192,7 +194,14 @@ BEGIN
     --   the row view skips it) are 21000, which the row view raises when the statement
     --   ends, so after any of the others; a key whose first event is i and that has others: 23505 (there
     --   already, or inserted twice). The first refusal in the statement's order is raised; nothing is written.
+    -- A statement that only deleted (no row kept in v_rows) has one event per key (the table of deleted rows has a
+    -- unique index on the row key): nothing to walk, and the query is skipped. When no key has two events, the
+    -- queue below holds each key once (its rows are the events but the skipped S and X), and its count of
+    -- distinct keys is skipped too (v_multi false).
     v_err := NULL;
+    v_multi := false;
+    EXECUTE format('SELECT EXISTS (SELECT FROM %s)', v_rows) INTO v_any;
+    IF v_any THEN
     FOR v_ev IN EXECUTE format(
             'WITH e AS (SELECT %3$s AS kt, lower(r.op::text) AS ev, r.s FROM %1$s r WHERE r.op IN (''I'') '
             '           UNION ALL SELECT %4$s, CASE WHEN r.op = ''U'' AND NOT (%5$s) THEN ''m'' WHEN r.op = ''U'' THEN ''u'' '
@@ -204,6 +213,7 @@ BEGIN
             v_rows, v_dels, format(v_keytext, 'r.n'), format(v_keytext, 'r.o'),
             array_to_string(ARRAY(SELECT format('(r.n).%1$I IS NOT DISTINCT FROM (r.o).%1$I', k) FROM unnest(v_keycols) AS k), ' AND '),
             format(v_keytext, 'd.o')) LOOP
+        v_multi := true;
         v_code := NULL;
         IF v_ev.evs[1] = 'i' THEN
             v_code := '23505';
@@ -245,6 +255,7 @@ BEGIN
             v_errkey := v_ev.kt;
         END IF;
     END LOOP;
+    END IF;
     IF v_err = '21000' THEN
         RAISE EXCEPTION 'one statement changed a row of %.% twice', TG_TABLE_SCHEMA, TG_TABLE_NAME
             USING ERRCODE = 'cardinality_violation', DETAIL = format('Row (%s)=(%s).', array_to_string(v_keycols, ', '), v_errkey),
@@ -296,8 +307,14 @@ BEGIN
     END IF;
     IF TG_LEVEL = 'STATEMENT' THEN
         -- the end of an UPDATE: every queued row of the face at once (of one group)
-        EXECUTE format('SELECT count(*), count(DISTINCT (%s)), array_agg(DISTINCT q.%I::text), coalesce(bool_or(q._delete), false) FROM %s q',
-                       array_to_string(ARRAY(SELECT format('q.%I', k) FROM unnest(v_keycols) AS k), ', '), v_kc, v_queue)
+        -- (the object keys: distinct by hashing, the few left sorted, as array_agg(DISTINCT) sorted every row)
+        EXECUTE format('SELECT count(*), %s, (SELECT array_agg(o.k ORDER BY o.k) FROM (SELECT DISTINCT q.%I::text AS k FROM %s q) o), '
+                       'coalesce(bool_or(q._delete), false) FROM %s q',
+                       CASE WHEN v_multi
+                            THEN format('count(DISTINCT (%s))',
+                                        array_to_string(ARRAY(SELECT format('q.%I', k) FROM unnest(v_keycols) AS k), ', '))
+                            ELSE 'count(*)' END,
+                       v_kc, v_queue, v_queue)
            INTO v_count, v_distinct, v_keys, v_deletes;
         IF v_count = 0 THEN
             RETURN NULL;
