@@ -459,7 +459,7 @@ def test_a_statement_split_in_two_groups_refuses_a_now_table_the_session_made(db
     plain = _feature(conn, "plainclass")
     versioned = _feature(conn, "alpha")
     _faces(conn)
-    now = conn.execute("SELECT tgsis.chunk_face_work('vrtx', 'now')").fetchone()[0]
+    (now,) = conn.execute("SELECT tgsis.chunk_face_work('vrtx', 'now')").fetchall()[0]
     both = f"INSERT INTO tgsis.vrtx_face VALUES ({plain}, 10, 1, 1, 1), ({versioned}, 10, 2, 2, 2)"
     with login_roles(db_dsn, {"editor": "tgsis_editor"}) as roles:
         hostile = roles.connect("editor")
