@@ -5,7 +5,7 @@ Versioning on, model 1 in chunks (the default); one object of ``--n`` vertices w
 through ``tgsis.vertex`` (one chunk by its primary key), ``tgsis.vertices`` of 1,000 ids spread over the
 object, and through the face (each row kept by the row trigger, all written by one call of the writer when
 the statement ends) a 10,000-row ``UPDATE``, a 5,000-row ``INSERT ... SELECT`` of new ids (5 new chunks)
-and a 10,000-row ``DELETE``. The baseline, in the same process: the same rows in a plain table with a
+and a 1,000-row and a 10,000-row ``DELETE`` (and one-row ``DELETE`` transactions, as the one-row ``UPDATE``s). The baseline, in the same process: the same rows in a plain table with a
 primary key (``public.plain``), the same key read and the same statements; both end with the same rows
 (checked bit for bit). Also a one-row ``UPDATE`` per transaction through the face (the face's work tables
 are made by each writing transaction and dropped at its commit, ``ON COMMIT DROP``): the best of
@@ -87,6 +87,21 @@ def main() -> None:
                 best = min(best, (time.perf_counter() - start) / (2 * args.transactions))
             return best
 
+        def one_row_deletes(table: str, first: int) -> float:
+            """The best round's mean time of a one-row DELETE transaction (committed) on ``table``, from id ``first``."""
+            best = float("inf")
+            for r in range(args.rounds):
+                start = time.perf_counter()
+                for i in range(args.transactions):
+                    done = conn.execute(
+                        f"DELETE FROM {table} WHERE geoid = 1 AND vrtxid = %s",  # noqa: S608
+                        (first + r * args.transactions + i,),
+                    ).rowcount
+                    conn.commit()
+                    assert done == 1
+                best = min(best, (time.perf_counter() - start) / args.transactions)
+            return best
+
         face_tx = one_row_transactions("tgsis.vrtx")
         plain_tx = one_row_transactions("public.plain")
         face_w2_tx = key_move_transactions("tgsis.vrtx")
@@ -99,6 +114,12 @@ def main() -> None:
         print(f"plain_one_row_update_tx_ms: {plain_tx * 1000:.2f}")
         print(f"face_one_row_key_move_tx_ms: {face_w2_tx * 1000:.1f}")
         print(f"plain_one_row_key_move_tx_ms: {plain_w2_tx * 1000:.2f}")
+        # one-row DELETE transactions, of ids far from the statements' below (the same ids on both tables)
+        face_del_tx = one_row_deletes("tgsis.vrtx", n * 5 // 6)
+        plain_del_tx = one_row_deletes("public.plain", n * 5 // 6)
+        print(f"face_one_row_delete_tx_ms: {face_del_tx * 1000:.1f}")
+        print(f"plain_one_row_delete_tx_ms: {plain_del_tx * 1000:.2f}")
+        print(f"face_one_row_delete_tx_vs_plain: {face_del_tx / plain_del_tx:.1f}")
         if args.one_row_only:
             return
         want = [(float(key), -float(key), float(args.transactions - 1))]  # z: the one-row UPDATEs' last
@@ -135,6 +156,12 @@ def main() -> None:
             f"UPDATE {{t}} SET vrtxid = vrtxid + {2 * n} WHERE geoid = 1 AND vrtxid >= {rows} AND vrtxid < {2 * rows}"
         )
         face_move, plain_move = statement(move, "tgsis.vrtx", rows), statement(move, "public.plain", rows)
+        # a 1,000-row DELETE (ids of two chunks), then the 10,000-row one
+        small = f"DELETE FROM {{t}} WHERE geoid = 1 AND vrtxid >= {n // 2} AND vrtxid < {n // 2 + min(1000, rows)}"
+        face_small, plain_small = (
+            statement(small, "tgsis.vrtx", min(1000, rows)),
+            statement(small, "public.plain", min(1000, rows)),
+        )
         delete = f"DELETE FROM {{t}} WHERE geoid = 1 AND vrtxid < {rows}"
         face_delete, plain_delete = statement(delete, "tgsis.vrtx", rows), statement(delete, "public.plain", rows)
         same = "SELECT geoid, vrtxid, float8send(x), float8send(y), float8send(z) FROM {t} ORDER BY 1, 2"
@@ -167,6 +194,8 @@ def main() -> None:
         print(f"face_insert_select_vs_plain: {face_insert / plain_insert:.1f}")
         print(f"face_key_move_update_s: {face_move:.2f}")
         print(f"face_key_move_update_vs_plain: {face_move / plain_move:.1f}")
+        print(f"face_delete_1000_s: {face_small:.3f}")
+        print(f"face_delete_1000_vs_plain: {face_small / plain_small:.1f}")
         print(f"face_delete_s: {face_delete:.2f}")
         print(f"face_delete_vs_plain: {face_delete / plain_delete:.1f}")
 

@@ -449,6 +449,35 @@ def test_roles_with_fewer_rights(db_dsn: str, conn: Conn) -> None:
 # --------------------------------------------------------------------------- keyed reads
 
 
+def test_a_statement_split_in_two_groups_refuses_a_now_table_the_session_made(db_dsn: str, conn: Conn) -> None:
+    """A statement writing features of a class without versioning and versioned ones is written in two groups, the
+    features without versioning waiting in the work table ``now`` (tgsis.chunk_face_work) for the second: made by
+    the flush only while some feature is of a class without versioning (a transaction writing through the face makes no table it does not need), and
+    refused (42501) when the session made it itself, as the other work tables."""
+    tgsis.enable_feature_versioning(conn)
+    tgsis.create_feature_class(conn, "plainclass", "SURFACE", versioned=False)
+    plain = _feature(conn, "plainclass")
+    versioned = _feature(conn, "alpha")
+    _faces(conn)
+    (now,) = conn.execute("SELECT tgsis.chunk_face_work('vrtx', 'now')").fetchall()[0]
+    both = f"INSERT INTO tgsis.vrtx_face VALUES ({plain}, 10, 1, 1, 1), ({versioned}, 10, 2, 2, 2)"
+    with login_roles(db_dsn, {"editor": "tgsis_editor"}) as roles:
+        hostile = roles.connect("editor")
+        hostile.execute(
+            f"CREATE TEMP TABLE {now} (LIKE tgsis.vrtx_face, _delete boolean, tgsis_old tgsis.vrtx_face, tgsis_seq bigint)"
+        )
+        assert _sqlstate(hostile, both) == "42501"
+        hostile.close()
+        editor = roles.connect("editor")
+        assert _sqlstate(editor, both) is None
+        editor.commit()
+        editor.close()
+    # both groups written (the hostile session's statement wrote nothing)
+    assert _face(conn, where=f"WHERE geoid IN ({plain}, {versioned})") == sorted(
+        [(plain, 10, 1.0, 1.0, 1.0), (versioned, 10, 2.0, 2.0, 2.0)]
+    )
+
+
 def test_keyed_reads_read_today_s_rows_then_the_chunks_by_key(conn: Conn) -> None:
     tgsis.enable_feature_versioning(conn)
     geoid = _feature(conn)

@@ -117,6 +117,8 @@ DECLARE
     v_st        text;
     v_nu        integer;
     v_i         integer;
+    v_any       boolean;   -- the statement kept rows in v_rows (not only deleted rows)
+    v_multi     boolean;   -- some key has more than one event in the statement
 BEGIN
     SELECT * INTO v_reg FROM tgsis.chunk_registry(v_table) r;
     v_objclass := coalesce((SELECT t.objectclass FROM tgsis.model_tables t WHERE t.tablename = v_reg.tablename AND v_reg.classname IS NULL),
@@ -145,8 +147,10 @@ BEGIN
     v_keytext := format('concat_ws(%L, %s)', ', ',
                         (SELECT string_agg(format('(%%1$s).%I::text', k), ', ' ORDER BY o) FROM unnest(v_keycols) WITH ORDINALITY AS u(k, o)));
     -- the transaction's temporary tables of rows to write (ON COMMIT DROP: a session idle after its commit keeps
-    -- nothing of the face's row type): the face's columns, _delete, the row read
-    FOREACH v_tab IN ARRAY ARRAY[v_now, v_queue] LOOP
+    -- nothing of the face's row type): the face's columns, _delete, the row read; v_now only when a statement
+    -- may be split in two groups (below: only while some feature is of a class without versioning; a table
+    -- made per transaction costs 2-5 ms)
+    FOREACH v_tab IN ARRAY ARRAY[v_queue] LOOP
         IF to_regclass(v_tab) IS NULL THEN
             EXECUTE format('CREATE TEMP TABLE %s (LIKE %s, _delete boolean NOT NULL DEFAULT false, tgsis_old %s, tgsis_seq bigint) '
                            'ON COMMIT DROP', v_tab, v_face, v_face);
@@ -192,7 +196,14 @@ BEGIN
     --   the row view skips it) are 21000, which the row view raises when the statement
     --   ends, so after any of the others; a key whose first event is i and that has others: 23505 (there
     --   already, or inserted twice). The first refusal in the statement's order is raised; nothing is written.
+    -- A statement that only deleted (no row kept in v_rows) has one event per key (the table of deleted rows has a
+    -- unique index on the row key): nothing to walk, and the query is skipped. When no key has two events, the
+    -- queue below holds each key once (its rows are the events but the skipped S and X), and its count of
+    -- distinct keys is skipped too (v_multi false).
     v_err := NULL;
+    v_multi := false;
+    EXECUTE format('SELECT EXISTS (SELECT FROM %s)', v_rows) INTO v_any;
+    IF v_any THEN
     FOR v_ev IN EXECUTE format(
             'WITH e AS (SELECT %3$s AS kt, lower(r.op::text) AS ev, r.s FROM %1$s r WHERE r.op IN (''I'') '
             '           UNION ALL SELECT %4$s, CASE WHEN r.op = ''U'' AND NOT (%5$s) THEN ''m'' WHEN r.op = ''U'' THEN ''u'' '
@@ -204,6 +215,7 @@ BEGIN
             v_rows, v_dels, format(v_keytext, 'r.n'), format(v_keytext, 'r.o'),
             array_to_string(ARRAY(SELECT format('(r.n).%1$I IS NOT DISTINCT FROM (r.o).%1$I', k) FROM unnest(v_keycols) AS k), ' AND '),
             format(v_keytext, 'd.o')) LOOP
+        v_multi := true;
         v_code := NULL;
         IF v_ev.evs[1] = 'i' THEN
             v_code := '23505';
@@ -245,6 +257,7 @@ BEGIN
             v_errkey := v_ev.kt;
         END IF;
     END LOOP;
+    END IF;
     IF v_err = '21000' THEN
         RAISE EXCEPTION 'one statement changed a row of %.% twice', TG_TABLE_SCHEMA, TG_TABLE_NAME
             USING ERRCODE = 'cardinality_violation', DETAIL = format('Row (%s)=(%s).', array_to_string(v_keycols, ', '), v_errkey),
@@ -286,7 +299,15 @@ BEGIN
         -- when the statement changed both, those of no version wait in v_now (empty between rows) for a second pass
         v_split := false;
         IF v_objclass = 'feature'
-           AND EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = v_sch AND t.tablename = v_tname) THEN
+           AND EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = v_sch AND t.tablename = v_tname)
+           AND EXISTS (SELECT FROM tgsis.unversioned_features) THEN
+            IF to_regclass(v_now) IS NULL THEN
+                EXECUTE format('CREATE TEMP TABLE %s (LIKE %s, _delete boolean NOT NULL DEFAULT false, tgsis_old %s, tgsis_seq bigint) '
+                               'ON COMMIT DROP', v_now, v_face, v_face);
+            ELSIF (SELECT c.relowner FROM pg_class c WHERE c.oid = to_regclass(v_now)) <> (SELECT r.oid FROM pg_roles r WHERE r.rolname = current_user) THEN
+                RAISE EXCEPTION 'the session''s table % was not made by the face''s trigger', v_now
+                    USING ERRCODE = 'insufficient_privilege', HINT = 'drop the temporary table and write again';
+            END IF;
             EXECUTE format('WITH moved AS (DELETE FROM %1$s q WHERE q.%3$I IN (SELECT u.geoid FROM tgsis.unversioned_features u) '
                            '  AND EXISTS (SELECT FROM %1$s o WHERE o.%3$I NOT IN (SELECT u.geoid FROM tgsis.unversioned_features u)) '
                            'RETURNING q.*) INSERT INTO %2$s SELECT * FROM moved', v_queue, v_now, v_kc);
@@ -296,8 +317,14 @@ BEGIN
     END IF;
     IF TG_LEVEL = 'STATEMENT' THEN
         -- the end of an UPDATE: every queued row of the face at once (of one group)
-        EXECUTE format('SELECT count(*), count(DISTINCT (%s)), array_agg(DISTINCT q.%I::text), coalesce(bool_or(q._delete), false) FROM %s q',
-                       array_to_string(ARRAY(SELECT format('q.%I', k) FROM unnest(v_keycols) AS k), ', '), v_kc, v_queue)
+        -- (the object keys: distinct by hashing, the few left sorted, as array_agg(DISTINCT) sorted every row)
+        EXECUTE format('SELECT count(*), %s, (SELECT array_agg(o.k ORDER BY o.k) FROM (SELECT DISTINCT q.%I::text AS k FROM %s q) o), '
+                       'coalesce(bool_or(q._delete), false) FROM %s q',
+                       CASE WHEN v_multi
+                            THEN format('count(DISTINCT (%s))',
+                                        array_to_string(ARRAY(SELECT format('q.%I', k) FROM unnest(v_keycols) AS k), ', '))
+                            ELSE 'count(*)' END,
+                       v_kc, v_queue, v_queue)
            INTO v_count, v_distinct, v_keys, v_deletes;
         IF v_count = 0 THEN
             RETURN NULL;
