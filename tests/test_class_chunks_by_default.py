@@ -141,3 +141,42 @@ def test_an_admin_who_is_not_the_owner_gets_the_chunk_tables_with_the_class_gran
         )
         # the switch itself stays the admins': not callable by an editor
         assert sqlstate(editor, "SELECT tgsis.chunk_class_by_default('layer')")[0] == "42501"
+
+
+@pytest.mark.storage("chunks")
+def test_dropping_properties_of_a_class_in_chunks(conn: Conn) -> None:
+    tgsis.create_feature_class(
+        conn, "layer", "SURFACE", cell_properties=[("porosity", "double precision"), ("depth", "real")]
+    )
+    surface = curved_surface()
+    geoid = F.insert_feature(
+        conn,
+        "layer",
+        tgsis.Surface(
+            surface.vertices,
+            surface.cells,
+            vertex_properties={
+                "porosity": surface.vertex_properties["porosity"],
+                "depth": np.ones(len(surface.vertices)),
+            },
+        ),
+    )
+    # the values held are counted per vertex, not per chunk
+    state, message = sqlstate(conn, "SELECT tgsis.drop_property('layer', 'depth')")
+    assert state == "TG202" and f"holds {len(surface.vertices)} value(s)" in message
+    conn.execute("SELECT tgsis.drop_property('layer', 'depth', p_force => true)")
+    assert _chunked(conn, "layer_cellpros")
+    # the last one: the table has nothing a chunk would hold, so it is rows again; a new property puts it back
+    conn.execute("SELECT tgsis.drop_property('layer', 'porosity', p_force => true)")
+    assert not _chunked(conn, "layer_cellpros")
+    assert F.fetch_feature(conn, "layer", geoid).mesh is not None
+    conn.execute("""SELECT tgsis.add_property('layer', 'cell', '["porosity", "double precision"]', '0.5')""")
+    assert _chunked(conn, "layer_cellpros")
+    _same_feature(
+        conn,
+        "layer",
+        geoid,
+        tgsis.Surface(
+            surface.vertices, surface.cells, vertex_properties={"porosity": np.full(len(surface.vertices), 0.5)}
+        ),
+    )
