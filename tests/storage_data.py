@@ -84,9 +84,15 @@ def tables_as_rows(conn: Conn, tables: tuple[str, ...]) -> None:
 
 
 def classes_as_rows(dsn: str) -> None:
-    """New classes of the database of ``dsn`` made with their property tables as rows, in every later session
+    """The classes of the database of ``dsn`` as rows: those it has (a set-up built once, e.g. ``fault_clone``)
+    stored as rows (``tgsis.store_class_in_rows``), new ones made so in every later session
     (``ALTER DATABASE ... SET tgsis.storage = rows``): where a test that switches a class itself
     (``tgsis.store_class_in_chunks``) or compares it with a rows twin starts, whatever model 1's storage
     would give it (docs/storage.md, "Property chunks by default: the rule")."""
     with psycopg.connect(dsn, autocommit=True) as admin:
         admin.execute(sql.SQL("ALTER DATABASE {} SET tgsis.storage = rows").format(sql.Identifier(admin.info.dbname)))
+        admin.execute(
+            "SELECT tgsis.store_class_in_rows(c.classname) FROM tgsis.catalog c "
+            "WHERE tgsis.stored_in_chunks(c.schemaname, c.cellprotable) "
+            "OR (c.otherprotable IS NOT NULL AND tgsis.stored_in_chunks(c.schemaname, c.otherprotable))"
+        )
