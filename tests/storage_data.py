@@ -12,6 +12,7 @@ from __future__ import annotations
 from typing import Any
 
 import psycopg
+from psycopg import sql
 
 from tgsis.errors import translate
 
@@ -80,3 +81,18 @@ def tables_as_rows(conn: Conn, tables: tuple[str, ...]) -> None:
         if conn.execute("SELECT tgsis.stored_in_chunks(%s)", (table,)).fetchone() == (True,):
             conn.execute("SELECT tgsis.store_in_rows(%s)", (table,))
     conn.commit()
+
+
+def classes_as_rows(dsn: str) -> None:
+    """The classes of the database of ``dsn`` as rows: those it has (a set-up built once, e.g. ``fault_clone``)
+    stored as rows (``tgsis.store_class_in_rows``), new ones made so in every later session
+    (``ALTER DATABASE ... SET tgsis.storage = rows``): where a test that switches a class itself
+    (``tgsis.store_class_in_chunks``) or compares it with a rows twin starts, whatever model 1's storage
+    would give it (docs/storage.md, "Property chunks by default: the rule")."""
+    with psycopg.connect(dsn, autocommit=True) as admin:
+        admin.execute(sql.SQL("ALTER DATABASE {} SET tgsis.storage = rows").format(sql.Identifier(admin.info.dbname)))
+        admin.execute(
+            "SELECT tgsis.store_class_in_rows(c.classname) FROM tgsis.catalog c "
+            "WHERE tgsis.stored_in_chunks(c.schemaname, c.cellprotable) "
+            "OR (c.otherprotable IS NOT NULL AND tgsis.stored_in_chunks(c.schemaname, c.otherprotable))"
+        )

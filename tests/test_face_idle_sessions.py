@@ -22,10 +22,19 @@ import pytest
 import tgsis
 from tests.merge_data import curved_surface, sqlstate
 from tests.sessions import connect
+from tests.storage_data import classes_as_rows
 from tgsis.db import features as F
 from tgsis.mesh import Surface
 
 Conn = psycopg.Connection[Any]
+
+
+@pytest.fixture(autouse=True)
+def _classes_as_rows(db_dsn: str) -> None:
+    """The classes these tests make start as rows: they switch them to chunks themselves, or compare with a rows
+    twin (docs/storage.md, "Property chunks by default: the rule")."""
+    classes_as_rows(db_dsn)
+
 
 #: the face's work tables the session holds (its sequence, which depends on nothing, left out)
 WORK_TABLES = (

@@ -20,8 +20,17 @@ import pytest
 
 import tgsis
 from tests.sessions import Background, connect, wait_until_blocked
+from tests.storage_data import classes_as_rows
 
 Conn = psycopg.Connection[Any]
+
+
+@pytest.fixture(autouse=True)
+def _classes_as_rows(db_dsn: str) -> None:
+    """The classes these tests make start as rows: they switch them to chunks themselves, or compare with a rows
+    twin (docs/storage.md, "Property chunks by default: the rule")."""
+    classes_as_rows(db_dsn)
+
 
 FIRST = 2048  # new ids 2048 .. 2048 + 3071: exactly chunks 2, 3 and 4 of the fault (ids 0 .. 143 in chunk 0)
 NEW = 3072

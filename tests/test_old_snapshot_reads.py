@@ -23,10 +23,18 @@ import pytest
 import tgsis
 from tests.merge_data import curved_surface
 from tests.sessions import connect
+from tests.storage_data import classes_as_rows
 from tgsis.db import features as F
 from tgsis.mesh import GeometryCollection, Surface
 
 Conn = psycopg.Connection[Any]
+
+
+@pytest.fixture(autouse=True)
+def _classes_as_rows(db_dsn: str) -> None:
+    """The classes these tests make start as rows: they switch them to chunks themselves, or compare with a rows
+    twin (docs/storage.md, "Property chunks by default: the rule")."""
+    classes_as_rows(db_dsn)
 
 
 def _old_snapshot(db_dsn: str) -> Conn:

@@ -14,16 +14,26 @@ from typing import Any
 
 import numpy as np
 import psycopg
+import pytest
 from psycopg import sql
 
 import tgsis
 from tests.merge_data import curved_surface, every_view, sqlstate
 from tests.roles import login_roles
 from tests.sessions import Background, connect, wait_until_blocked
+from tests.storage_data import classes_as_rows
 from tgsis.db import features as F
 from tgsis.mesh import GeometryCollection, Surface
 
 Conn = psycopg.Connection[Any]
+
+
+@pytest.fixture(autouse=True)
+def _classes_as_rows(db_dsn: str) -> None:
+    """The classes these tests make start as rows: they switch them to chunks themselves, or compare with a rows
+    twin (docs/storage.md, "Property chunks by default: the rule")."""
+    classes_as_rows(db_dsn)
+
 
 #: float8 bits: -0.0, the smallest subnormal, NaN with a payload, -inf
 F8_BITS = [0x8000000000000000, 0x0000000000000001, 0x7FF8000000000ABC, 0xFFF0000000000000]

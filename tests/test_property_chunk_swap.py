@@ -23,12 +23,21 @@ from psycopg import sql
 import tgsis
 from tests.merge_data import curved_surface, sqlstate
 from tests.roles import login_roles
+from tests.storage_data import classes_as_rows
 from tgsis import _chunks
 from tgsis.db import _property_chunks
 from tgsis.db import features as F
 from tgsis.mesh import Surface
 
 Conn = psycopg.Connection[Any]
+
+
+@pytest.fixture(autouse=True)
+def _classes_as_rows(db_dsn: str) -> None:
+    """The classes these tests make start as rows: they switch them to chunks themselves, or compare with a rows
+    twin (docs/storage.md, "Property chunks by default: the rule")."""
+    classes_as_rows(db_dsn)
+
 
 N = 1600  # curved_surface(40): chunks 0 and 1 (partial)
 TABLE = "public.rock_cellpros"

@@ -26,10 +26,19 @@ import tgsis.db._property_chunks as property_chunks
 from tests.merge_data import curved_surface, sqlstate
 from tests.roles import login_roles
 from tests.sessions import Background, connect, wait_until_blocked
+from tests.storage_data import classes_as_rows
 from tgsis.db import features as F
 from tgsis.mesh import GeometryCollection, Surface
 
 Conn = psycopg.Connection[Any]
+
+
+@pytest.fixture(autouse=True)
+def _classes_as_rows(db_dsn: str) -> None:
+    """The classes these tests make start as rows: they switch them to chunks themselves, or compare with a rows
+    twin (docs/storage.md, "Property chunks by default: the rule")."""
+    classes_as_rows(db_dsn)
+
 
 TYPES = [
     ("p_i2", "smallint", np.int16),

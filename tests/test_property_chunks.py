@@ -25,11 +25,20 @@ import tgsis
 from tests.merge_data import SIDE, curved_surface, every_view, sqlstate, varied_history
 from tests.roles import login_roles
 from tests.sessions import Background, connect, wait_until_blocked
+from tests.storage_data import classes_as_rows
 from tgsis.db import features as F
 from tgsis.mesh import Surface
 from tgsis.testing import TestServer
 
 Conn = psycopg.Connection[Any]
+
+
+@pytest.fixture(autouse=True)
+def _classes_as_rows(db_dsn: str) -> None:
+    """The classes these tests make start as rows: they switch them to chunks themselves, or compare with a rows
+    twin (docs/storage.md, "Property chunks by default: the rule")."""
+    classes_as_rows(db_dsn)
+
 
 TYPES = [
     ("p_i2", "smallint"),

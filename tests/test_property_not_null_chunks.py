@@ -17,9 +17,17 @@ import psycopg
 import pytest
 
 import tgsis
-from tests.storage_data import answer
+from tests.storage_data import answer, classes_as_rows
 
 Conn = psycopg.Connection[Any]
+
+
+@pytest.fixture(autouse=True)
+def _classes_as_rows(db_dsn: str) -> None:
+    """The classes these tests make start as rows: they switch them to chunks themselves, or compare with a rows
+    twin (docs/storage.md, "Property chunks by default: the rule")."""
+    classes_as_rows(db_dsn)
+
 
 PROPS: list[tuple[str, str] | tuple[str, str, int]] = [
     ("normal", "double precision", 3),

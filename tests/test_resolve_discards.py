@@ -21,6 +21,7 @@ from psycopg.conninfo import make_conninfo
 import tgsis
 from tests.conftest import BuiltOnce, cloned_or_built
 from tests.roles import login_roles
+from tests.storage_data import storage_of
 from tgsis.cli import main
 from tgsis.db import features as F
 from tgsis.db import versions as V
@@ -259,7 +260,7 @@ def test_roles_with_fewer_rights(
             "public.domes: 1 changed (1 value); public.domes_cellpros: 2 changed (2 values)"
         )
         # without the right to read some of the object's rows: the conflicts, and no counts (never made up)
-        conn.execute("REVOKE SELECT ON domes_cellpros_ver FROM tgsis_reader")
+        conn.execute(f"REVOKE SELECT ON {storage_of(conn, 'domes_cellpros', 'public')} FROM tgsis_reader")
         conn.commit()
         out, err = _run(reader_dsn, capsys, "version", "conflicts", "edit", "--no-header")
         assert out.rstrip("\n").split("\t")[:3] == ["feature", a, "unsolved"] and out.rstrip("\n").endswith("\t?\t?")
@@ -281,7 +282,7 @@ def test_roles_with_fewer_rights(
             out == f"feature {a} in edit: parent\n  what it discarded of the other side's edits is not shown: "
             "this role may not read the object's rows\n"
         )
-        conn.execute("GRANT SELECT ON domes_cellpros_ver TO tgsis_reader")
+        conn.execute(f"GRANT SELECT ON {storage_of(conn, 'domes_cellpros', 'public')} TO tgsis_reader")
         conn.commit()
         _run(editor_dsn, capsys, "version", "resolve", "edit", "feature", a, "unsolved")
         _, err = _run(editor_dsn, capsys, "version", "resolve", "edit", "feature", a, "parent", code=1)
@@ -294,7 +295,7 @@ def test_roles_with_fewer_rights(
         )
         # a merger that may not read the property rows merges all the same, and is told the counts are not shown
         tgsis.grant_version(conn, "DEFAULT", "merge", roles.name("editor"))
-        conn.execute("REVOKE SELECT ON domes_cellpros_ver FROM tgsis_reader")
+        conn.execute(f"REVOKE SELECT ON {storage_of(conn, 'domes_cellpros', 'public')} FROM tgsis_reader")
         conn.commit()
         out, _ = _run(editor_dsn, capsys, "version", "merge", "edit")
         assert out.startswith("merged edit into its parent: ") and "is not shown" in out

@@ -171,7 +171,10 @@ def test_upgraded_database_equals_a_fresh_install(
         tgsis.install(conn, method=method)  # type: ignore[arg-type]
         # an upgraded database keeps its time tables as rows (docs/storage.md): a fresh one keeping them so too
         conn.execute(_KEPT_AS_ROWS)
+        # and keeps its classes where they are, as rows: a fresh one registers them under tgsis.storage = rows
+        conn.execute("SET tgsis.storage = rows")
         conn.execute(_USE)
+        conn.execute("RESET tgsis.storage")
         conn.commit()
         want = _objects(conn)
         want_notes = conn.execute(_NOTES).fetchall()
@@ -602,6 +605,11 @@ def test_the_upgrade_stores_model_1_in_chunks_and_every_version_and_revision_see
             None,
         )
         assert _every_set(conn) == before
+        # the classes of 0.2.0 stay where they were, as rows; a class registered now is made in chunks, as in a
+        # new database (docs/storage.md, "Property chunks by default: the rule")
+        assert conn.execute("SELECT tgsis.stored_in_chunks('public', 'horizon_cellpros')").fetchone() == (False,)
+        conn.execute("""SELECT tgsis.register_feature_class('later', 'SURFACE', '[]', '[["depth", "real"]]')""")
+        assert conn.execute("SELECT tgsis.stored_in_chunks('public', 'later_cellpros')").fetchone() == (True,)
         # and it goes on working: a change saved in survey3, DEFAULT unchanged
         conn.execute("SELECT tgsis.goto_version('survey3', true)")
         conn.execute("UPDATE tgsis.vrtx SET z = 7 WHERE vrtxid = 0 AND x = 10")

@@ -19,8 +19,17 @@ import pytest
 from psycopg.types.json import Jsonb
 
 import tgsis
+from tests.storage_data import classes_as_rows
 
 Conn = psycopg.Connection[Any]
+
+
+@pytest.fixture(autouse=True)
+def _classes_as_rows(db_dsn: str) -> None:
+    """The classes these tests make start as rows: they switch them to chunks themselves, or compare with a rows
+    twin (docs/storage.md, "Property chunks by default: the rule")."""
+    classes_as_rows(db_dsn)
+
 
 #: twins of names of one length, so that the shortened names compare once the twin's name is replaced
 TWINS = {"rows": "twr", "chunks": "twc"}

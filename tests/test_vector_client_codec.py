@@ -22,6 +22,7 @@ from psycopg import sql
 
 import tgsis
 from tests.merge_data import curved_surface
+from tests.storage_data import classes_as_rows
 from tests.test_vector_property_chunks import PATTERNS, PROPS, _double, _vec
 from tgsis import _chunks
 from tgsis.db import _property_chunks
@@ -32,6 +33,14 @@ from tgsis.errors import InvalidInputError
 from tgsis.mesh import Surface
 
 Conn = psycopg.Connection[Any]
+
+
+@pytest.fixture(autouse=True)
+def _classes_as_rows(db_dsn: str) -> None:
+    """The classes these tests make start as rows: they switch them to chunks themselves, or compare with a rows
+    twin (docs/storage.md, "Property chunks by default: the rule")."""
+    classes_as_rows(db_dsn)
+
 
 ODD4 = np.array([0x7FC0_0ABC, 1, 0x8000_0000], dtype=np.uint32).view(np.float32)
 

@@ -22,10 +22,19 @@ from psycopg import sql
 
 import tgsis
 from tests.merge_data import sqlstate
+from tests.storage_data import classes_as_rows
 from tests.test_vector_property_chunks import _insert_mesh, _vec
 from tgsis.testing import TestServer
 
 Conn = psycopg.Connection[Any]
+
+
+@pytest.fixture(autouse=True)
+def _classes_as_rows(db_dsn: str) -> None:
+    """The classes these tests make start as rows: they switch them to chunks themselves, or compare with a rows
+    twin (docs/storage.md, "Property chunks by default: the rule")."""
+    classes_as_rows(db_dsn)
+
 
 ADD_DIR = """SELECT tgsis.add_property('{c}', 'cell', '{{"name": "dir", "type": "real", "size": 2}}', '-0')"""
 ADD_NUL = """SELECT tgsis.add_property('{c}', 'cell', '{{"name": "nul", "type": "double precision", "size": 3}}')"""

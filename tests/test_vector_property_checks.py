@@ -22,11 +22,19 @@ import pytest
 
 import tgsis
 from tests.merge_data import curved_surface
-from tests.storage_data import answer
+from tests.storage_data import answer, classes_as_rows
 from tgsis.db import features as F
 from tgsis.mesh import Surface
 
 Conn = psycopg.Connection[Any]
+
+
+@pytest.fixture(autouse=True)
+def _classes_as_rows(db_dsn: str) -> None:
+    """The classes these tests make start as rows: they switch them to chunks themselves, or compare with a rows
+    twin (docs/storage.md, "Property chunks by default: the rule")."""
+    classes_as_rows(db_dsn)
+
 
 PROPS = [("normal", "double precision", 3), ("t", "real", 1), ("pair", "integer", 2)]
 #: the compared columns: keys, then each property by its bits (array_send keeps shape and element bits)

@@ -27,11 +27,20 @@ import tgsis
 from tests.merge_data import curved_surface, sqlstate
 from tests.roles import login_roles
 from tests.sessions import close_and_wait_gone
+from tests.storage_data import classes_as_rows
 from tgsis.db import features as F
 from tgsis.mesh import Surface
 from tgsis.testing import TestServer
 
 Conn = psycopg.Connection[Any]
+
+
+@pytest.fixture(autouse=True)
+def _classes_as_rows(db_dsn: str) -> None:
+    """The classes these tests make start as rows: they switch them to chunks themselves, or compare with a rows
+    twin (docs/storage.md, "Property chunks by default: the rule")."""
+    classes_as_rows(db_dsn)
+
 
 PROPS = [("normal", "double precision", 3), ("t", "real", 1), ("pair", "integer", 2), ("rgb", "real", 3)]
 VEC = "public.vec_cellpros"

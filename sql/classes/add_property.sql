@@ -19,6 +19,10 @@
 -- which tgsis.fill_property_rows repairs first). The feature table is locked
 -- against writers meanwhile, so an upload in flight is counted or waits.
 -- A NOTICE says how many features and rows got the default.
+-- The first vertex or cell property of a STATIC class's table puts the class
+-- in chunks when model 1 is in chunks and tgsis.storage is not rows
+-- (tgsis.chunk_class_by_default), as registering it with that property would
+-- have: the rows just given the default move to chunks, verified.
 -- Runs as tgsis's owner (SECURITY DEFINER), who owns the class's tables, for
 -- members of tgsis_admin, like register_feature_class.
 CREATE FUNCTION tgsis.add_property(p_class text, p_kind text, p_property jsonb, p_default text DEFAULT NULL)
@@ -52,6 +56,7 @@ DECLARE
     v_b2       integer;
     v_label    text;
     v_pass     integer;
+    v_first    boolean;   -- a vertex or cell property, the first of its table
 BEGIN
     IF p_kind IS NULL OR p_kind NOT IN ('feature', 'cell', 'instant') THEN
         RAISE EXCEPTION 'property kind % must be feature, cell or instant', coalesce(quote_literal(p_kind), 'NULL')
@@ -114,6 +119,9 @@ BEGIN
             v_item := v_item || jsonb_build_object('size', v_prop.size);
         END IF;
     END IF;
+    v_first := p_kind = 'cell'
+               AND NOT EXISTS (SELECT FROM jsonb_array_elements(v_class.cell_properties) p
+                                WHERE coalesce(p ->> 'alignment', v_class.proalignment) = coalesce(v_align, v_class.proalignment));
     v_type := v_prop.typename || CASE WHEN v_prop.size > 1 THEN '[]' ELSE '' END;
     -- as at registration: vertex and cell properties are NOT NULL but in collections (members lack some)
     v_notnull := p_kind = 'cell' AND v_class.geotype <> 'GEOMETRYCOLLECTION';
@@ -226,9 +234,15 @@ BEGIN
                                                          ELSE c.instant_properties END
      WHERE c.classname = p_class
     RETURNING * INTO v_row;
+    -- the table's first property column: a STATIC class registered without one (so left rows, nothing to chunk)
+    -- takes the default storage now, as if registered with it (tgsis.chunk_class_by_default: when model 1 is in
+    -- chunks and tgsis.storage is not rows; the rows just given the default move, verified)
+    IF v_first AND tgsis.chunk_class_by_default(p_class) THEN
+        SELECT * INTO v_row FROM tgsis.catalog c WHERE c.classname = p_class;
+    END IF;
     RETURN v_row;
 END
 $$;
 
 COMMENT ON FUNCTION tgsis.add_property(text, text, jsonb, text) IS
-    'add a property to a feature class (tgsis_admin members), in every version: p_kind feature, cell (vertex or cell, of either alignment the class has a table for) or instant (temporal classes); stored rows get p_default (required for vertex and cell properties of a class with rows); updates tgsis.catalog, the views and the versioning triggers; returns the catalog row';
+    'add a property to a feature class (tgsis_admin members), in every version: p_kind feature, cell (vertex or cell, of either alignment the class has a table for) or instant (temporal classes); stored rows get p_default (required for vertex and cell properties of a class with rows); the first vertex or cell property of a STATIC class''s table stores the class in chunks when model 1 is in chunks and tgsis.storage is not rows (tgsis.chunk_class_by_default); updates tgsis.catalog, the views and the versioning triggers; returns the catalog row';

@@ -16,6 +16,11 @@
 -- versioning, before or after tgsis.enable_feature_versioning: its tables
 -- stay plain and its features' rows in the storage every class shares are
 -- rows of no version (tgsis.unversioned_features).
+-- Storage: a STATIC class's property tables are made in chunks when model 1
+-- is stored in chunks in this database and tgsis.storage is not rows
+-- (tgsis.chunk_class_by_default; docs/storage.md, "Property chunks by
+-- default: the rule"); a temporal class's, or any under tgsis.storage = rows,
+-- are rows.
 CREATE FUNCTION tgsis.register_feature_class(
     p_name               text,
     p_geotype            text,
@@ -302,6 +307,10 @@ BEGIN
     VALUES (p_name, p_schema, v_geotype, p_name, v_cellpros, v_other, v_view, v_pros, v_model, p_time_unit, v_align, p_srs,
             v_fprops, v_cprops, v_iprops, p_description, v_caller, p_cell_level, coalesce(p_versioned, true))
     RETURNING * INTO v_row;
+    -- the property tables of a STATIC class go to chunks when model 1 is in chunks and tgsis.storage does not say
+    -- rows (tgsis.chunk_class_by_default): empty, so nothing to convert; before versioning, which versions a class
+    -- in chunks as it is, and before the class view
+    PERFORM tgsis.chunk_class_by_default(p_name);
     -- once model 1 is versioned, every new class is versioned with it, unless registered without versioning
     IF v_row.versioned AND EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = 'tgsis' AND tablename = 'geometry') THEN
         PERFORM tgsis.version_class_tables(p_name);
@@ -312,4 +321,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.register_feature_class(text, text, jsonb, jsonb, text, integer, text, text, text, jsonb, text, integer, boolean) IS
-    'register a feature class (tgsis_admin members with CREATE on the schema; the tables belong to tgsis''s owner): creates <schema>.<name> (features), <name>_cellpros (vertex/cell properties of the class''s alignment), <name>_simplexpros or <name>_vertexpros (properties of the other alignment, if any), <name>_v (view) and for temporal classes (INSTANTS, EVOLVING) <name>_pros (per-instant properties); records it in tgsis.catalog; versioned with every class when feature versioning is on, unless p_versioned => false (its features are then of no version: one state every version sees, written in DEFAULT)';
+    'register a feature class (tgsis_admin members with CREATE on the schema; the tables belong to tgsis''s owner): creates <schema>.<name> (features), <name>_cellpros (vertex/cell properties of the class''s alignment), <name>_simplexpros or <name>_vertexpros (properties of the other alignment, if any), <name>_v (view) and for temporal classes (INSTANTS, EVOLVING) <name>_pros (per-instant properties); a STATIC class''s property tables in chunks when model 1 is in chunks and tgsis.storage is not rows (tgsis.chunk_class_by_default); records it in tgsis.catalog; versioned with every class when feature versioning is on, unless p_versioned => false (its features are then of no version: one state every version sees, written in DEFAULT)';

@@ -271,7 +271,15 @@ def create_feature_class(
     Raises
     ------
     InvalidNameError, InvalidPropertyError, InvalidInputError, AlreadyExistsError, NotFoundError,
-    MissingPrivilegeError, VersioningError (``versioned``)
+    MissingPrivilegeError, VersioningError (``versioned``), InstallationError (``tgsis.storage`` naming no storage)
+
+    Notes
+    -----
+    Storage: a STATIC class's vertex and cell property tables are made in
+    chunks when model 1 is stored in chunks in the database and the setting
+    ``tgsis.storage`` is not ``rows`` (``tgsis.chunk_class_by_default``;
+    docs/storage.md, "Property chunks by default: the rule"); a temporal class,
+    or one registered under ``SET tgsis.storage = rows``, keeps rows.
     """
     geotype_value = geotype.value if isinstance(geotype, Geotype) else str(geotype)
     with reraise(), conn.transaction():
