@@ -56,7 +56,7 @@ DECLARE
     v_flag      text;
     v_seq       text;
     v_chunkwhere text[];   -- the guard, visibility and rights filter of a chunk version (no slot test)
-    v_arrays    regclass;  -- model 3's node positions as arrays (tgsis.d4dvrtx_arrays), read by tgsis.vertices_at
+    v_arrays    regclass;  -- model 3's node positions as arrays (tgsis.d4dvrtx_arrays), read by model 3's snapshot at t
 BEGIN
     v_chunk := tgsis.chunk_table_of(p_table);  -- TG200 / TG100
     SELECT * INTO v_reg FROM tgsis.chunk_registry(p_table) r;
@@ -204,8 +204,8 @@ $body$, v_rowfn, v_rows, v_dels, v_seq, v_flag,
     -- model 3's node positions (the switch's face, named <table> or <table>_face, not a test's face beside the live
     -- table under another name): tgsis.d4dvrtx_arrays,
     -- one row per visible chunk version with its arrays as stored, the face's guard, visibility and rights filter,
-    -- its SELECT grants and owner; tgsis.vertices_at interpolates two instants' aligned chunks slot by slot on it
-    -- (tgsis.evolving_chunk_vertices; docs/storage.md "Snapshots at t"); dropped by tgsis.store_in_rows
+    -- its SELECT grants and owner; model 3's snapshot (vertices_at, temporal/) interpolates two instants' aligned chunks slot by slot on it
+    -- (evolving_chunk_vertices; docs/storage.md "Snapshots at t"); dropped by tgsis.store_in_rows
     IF coalesce(p_view, v_reg.tablename) IN (v_reg.tablename, v_reg.tablename || '_face') AND v_reg.classname IS NULL
        AND v_reg.tablename = 'd4dvrtx' THEN
         IF to_regclass('tgsis.d4dvrtx_arrays') IS NOT NULL THEN
@@ -221,7 +221,7 @@ $body$, v_rowfn, v_rows, v_dels, v_seq, v_flag,
         EXECUTE format('COMMENT ON VIEW %s IS %L', v_arrays,
                        format('model 3''s node positions stored in chunks (%s): one row per visible chunk version (the face''s '
                               'guard, visibility and class rights filter), base the id of its first slot, x, y, z its arrays '
-                              '(NULL at a hole); read by tgsis.vertices_at (tgsis.evolving_chunk_vertices), made by the switch '
+                              '(NULL at a hole); read by model 3''s snapshot at t (vertices_at, evolving_chunk_vertices), made by the switch '
                               'into chunks, dropped by the way back', v_chunk));
         FOR v_acl IN SELECT a.grantee, a.is_grantable FROM pg_class c, aclexplode(c.relacl) AS a
                       WHERE c.oid = v_face AND a.grantee <> c.relowner AND a.privilege_type = 'SELECT' LOOP
