@@ -98,6 +98,18 @@ BEGIN
     -- the revision indexes of every versioned storage (tgsis.create_revision_indexes says why)
     EXECUTE format('CREATE INDEX %I ON %s USING brin (revision) WITH (autosummarize = on)', v_name || '_revision_idx', v_chunk);
     EXECUTE format('CREATE INDEX %I ON %s (%I) WHERE revclosed', v_name || '_closed_idx', v_chunk, v_reg.keycolumn);
+    -- a point column whose row table answers box queries by a GiST index (md_vertex_point_idx on cube(coordinate)):
+    -- the box of each chunk version, GiST-indexed (tgsis.point_chunk_box, an expression: every writer keeps it right),
+    -- and its m by object, for the chunks whose points have fewer coordinates than a box query's axes
+    -- (tgsis.md_vertices_in_box: the cube type's && would need the box's other axes to hold 0)
+    FOR v_c IN SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'point'
+                  AND EXISTS (SELECT FROM pg_index i JOIN pg_class ic ON ic.oid = i.indexrelid JOIN pg_am am ON am.oid = ic.relam
+                               WHERE i.indrelid = v_storage AND am.amname = 'gist'
+                                 AND pg_get_expr(i.indexprs, i.indrelid) LIKE format('%%(%s)%%', quote_ident(c.name)))
+                ORDER BY c.colorder LOOP
+        EXECUTE format('CREATE INDEX %I ON %s USING gist (tgsis.point_chunk_box(%I))', v_name || '_' || v_c.name || '_box_idx',
+                       v_chunk, v_c.name);
+    END LOOP;
 
     -- comments, generated from the row table's
     EXECUTE format('COMMENT ON TABLE %s IS %L', v_chunk,
