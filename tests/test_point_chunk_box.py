@@ -200,7 +200,12 @@ def test_a_version_sees_its_edit_and_the_merge_brings_it(conn: Conn) -> None:
     conn.commit()
     conn.execute("SELECT tgsis.store_in_chunks('md_vertex')")
     conn.commit()
+    assert conn.execute("SELECT to_regclass('tgsis.md_vertex_chunk_coordinate_box_idx') IS NOT NULL").fetchone() == (
+        True,
+    )
+    scans = _index_scans(conn)
     before = _all_boxes(conn, 1)
+    assert _index_scans(conn) > scans, "the box index was read"
     tgsis.create_version(conn, "e1")
     conn.commit()
     with tgsis.in_version(conn, "e1"):
