@@ -186,6 +186,7 @@ def test_points_of_fewer_coordinates_than_the_axes_are_in_no_box(conn: Conn) -> 
     conn.commit()
     box = (["scale"], [5.0], [6.0])
     assert _in_box(conn, 1, *box) == [] == _by_face(conn, 1, *box)
+    assert _in_box(conn, 1, ["x"], [0.0], [100.0]) == []  # found by the rows' index before (scale unbounded: 0 in it)
     conn.execute("SELECT tgsis.store_in_chunks('md_vertex')")
     conn.commit()
     assert _in_box(conn, 1, *box) == [] == _by_face(conn, 1, *box)

@@ -14,7 +14,11 @@
 -- integer, bigint and smallint arrays. Indexes: the primary key and the two
 -- revision indexes every versioned storage has (a BRIN on revision, a btree on
 -- the object key of closed versions: tgsis.create_revision_indexes, which
--- names <table>_ver and so is not reused). Grants and row-level security are
+-- names <table>_ver and so is not reused), and for a point column whose row
+-- table has a GiST index over it (md_vertex's md_vertex_point_idx) a GiST
+-- index on each chunk version's box, <table>_chunk_<column>_box_idx
+-- (tgsis.point_chunk_box, an expression: every writer keeps it right; read by
+-- tgsis.md_vertices_in_box). Grants and row-level security are
 -- the row table's storage's (tgsis.grant_model_tables, tgsis.protect_model_tables),
 -- copied from the catalog: the same roles reach the same objects' chunks.
 -- A statement trigger checks what roles other than the owners insert
@@ -184,4 +188,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.create_chunk_table(text) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.create_chunk_table(text) IS
-    'create tgsis.<table>_chunk, the chunk storage of a model table registered for chunks (tgsis.model_tables.chunkcolumn), per the contract of docs/storage.md: columns from the live storage, lz4 or pglz compression, primary key and revision indexes, comments, the storage''s grants and row-level security, the check of direct inserts (tgsis.chunk_insert_check); TG200 for a table not registered for chunks, TG201 when it exists';
+    'create tgsis.<table>_chunk, the chunk storage of a model table registered for chunks (tgsis.model_tables.chunkcolumn), per the contract of docs/storage.md: columns from the live storage, lz4 or pglz compression, primary key and revision indexes (and a point column''s box index when its row table has a GiST index over it), comments, the storage''s grants and row-level security, the check of direct inserts (tgsis.chunk_insert_check); TG200 for a table not registered for chunks, TG201 when it exists';

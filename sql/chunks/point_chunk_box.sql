@@ -18,6 +18,7 @@ LANGUAGE plpgsql
 IMMUTABLE
 STRICT
 PARALLEL SAFE
+COST 10000  -- a pass over 1,024 points (~1 ms): the planner reads the box index rather than computing it per chunk
 SET search_path FROM CURRENT
 AS $$
 DECLARE
