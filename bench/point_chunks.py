@@ -9,6 +9,11 @@ random) written into the row table, its size with the GiST index on
 the chunk table's size, and a full scan of the object through the face against
 the row table's (best of ``--repeat``, ratio in the same run). The face's rows
 are checked equal to the rows' by ``array_send`` (bit for bit). Unversioned.
+Then ``tgsis.md_vertices_in_box`` over three x-y windows (10 x 10 points,
+100 x 100, a quarter of the object): the rows' per-point GiST index against
+the chunks' box index (plan N, B1; the answers compared bit for bit), and the
+face's read that answered on chunks before it (``face_ratio (before)``); the box
+index's bytes per point.
 
 With ``--transfer`` (plan M, Q) it measures the client codec instead: the
 points of one model-5 object of ``--side``^2 points in R^3 (odd bits among them)
@@ -55,6 +60,7 @@ def main() -> None:
             " FROM generate_series(0, %(n)s - 1) AS i",
             {"s": args.side, "n": n},
         )
+        conn.execute("INSERT INTO tgsis.md_gmap (geoid, dimension, embedding, axes) VALUES (1, 2, 3, '{x,y,z}')")
         conn.commit()
         conn.autocommit = True
         conn.execute("VACUUM ANALYZE tgsis.md_vertex")
@@ -75,6 +81,11 @@ def main() -> None:
         assert row is not None
         figures["rows_bytes_per_point"] = row[0] / n
         rows_scan = best(scan)
+        boxes = _boxes(args.side)
+        in_box = "SELECT vrtxid, array_send(coordinate) FROM tgsis.md_vertices_in_box(1, {})"
+        rows_boxes = {name: best(in_box.format(box)) for name, box in boxes.items()}
+        rows_answers = {name: conn.execute(in_box.format(box)).fetchall() for name, box in boxes.items()}
+        conn.rollback()
         before = conn.execute(sent).fetchall()
         conn.rollback()
         start = time.perf_counter()
@@ -94,9 +105,40 @@ def main() -> None:
         figures["face_scan_ratio"] = face_scan / rows_scan
         same = conn.execute(sent).fetchall() == before
         conn.rollback()
+        row = conn.execute("SELECT pg_relation_size('tgsis.md_vertex_chunk_coordinate_box_idx')").fetchone()
+        assert row is not None
+        figures["chunk_box_index_bytes_per_point"] = row[0] / n
+        # the index's cost on every write: tgsis.point_chunk_box of each chunk (of 1,024 points)
+        figures["chunk_box_seconds_per_chunk"] = best(
+            "SELECT count(tgsis.point_chunk_box(coordinate)) FROM tgsis.md_vertex_chunk"
+        ) / (n / 1024)
+        same_boxes = True
+        for name, box in boxes.items():
+            chunks = best(in_box.format(box))
+            same_boxes &= conn.execute(in_box.format(box)).fetchall() == rows_answers[name]
+            conn.rollback()
+            # what md_vertices_in_box did on chunks before the box: the rows' test over the face, every point decoded
+            face = best(
+                "SELECT vrtxid, array_send(coordinate) FROM tgsis.md_vertex WHERE geoid = 1"
+                f" AND cube(coordinate) <@ tgsis.md_query_box('{{x,y,z}}', {box})"
+                " AND NOT 'NaN'::double precision = ANY (coordinate) ORDER BY vrtxid"
+            )
+            figures[f"box {name}: rows_seconds"] = rows_boxes[name]
+            figures[f"box {name}: chunks_seconds"] = chunks
+            figures[f"box {name}: chunks_ratio"] = chunks / rows_boxes[name]
+            figures[f"box {name}: face_ratio (before)"] = face / rows_boxes[name]
         print(f"{n} points in R^3, one object; the face's rows equal the rows' bit for bit: {same}")
+        print(f"md_vertices_in_box answers equal on chunks and rows, bit for bit: {same_boxes}")
         for name, value in figures.items():
             print(f"{name}: {value:.3f}")
+
+
+def _boxes(side: int) -> dict[str, str]:
+    """The x-y windows of the grid: 10 x 10 points, 100 x 100, a quarter of the object, as md_query_box's arguments."""
+    windows = {"10x10": (side / 2, 10), "100x100": (side / 2, 100), "quarter": (0, side / 2)}
+    return {
+        name: f"'{{x,y}}', '{{{at},{at}}}', '{{{at + width},{at + width}}}'" for name, (at, width) in windows.items()
+    }
 
 
 def transfer(side: int, repeat: int) -> None:

@@ -136,6 +136,7 @@ _NAMED_IN_DOCS = frozenset(
         "or_list",
         "period_gaps",
         "plain_write_check",
+        "point_chunk_box",
         "postgis_rows",
         "postgis_schema",
         "property_at",

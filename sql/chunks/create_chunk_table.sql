@@ -14,7 +14,11 @@
 -- integer, bigint and smallint arrays. Indexes: the primary key and the two
 -- revision indexes every versioned storage has (a BRIN on revision, a btree on
 -- the object key of closed versions: tgsis.create_revision_indexes, which
--- names <table>_ver and so is not reused). Grants and row-level security are
+-- names <table>_ver and so is not reused), and for a point column whose row
+-- table has a GiST index over it (md_vertex's md_vertex_point_idx) a GiST
+-- index on each chunk version's box, <table>_chunk_<column>_box_idx
+-- (tgsis.point_chunk_box, an expression: every writer keeps it right; read by
+-- tgsis.md_vertices_in_box). Grants and row-level security are
 -- the row table's storage's (tgsis.grant_model_tables, tgsis.protect_model_tables),
 -- copied from the catalog: the same roles reach the same objects' chunks.
 -- A statement trigger checks what roles other than the owners insert
@@ -98,6 +102,18 @@ BEGIN
     -- the revision indexes of every versioned storage (tgsis.create_revision_indexes says why)
     EXECUTE format('CREATE INDEX %I ON %s USING brin (revision) WITH (autosummarize = on)', v_name || '_revision_idx', v_chunk);
     EXECUTE format('CREATE INDEX %I ON %s (%I) WHERE revclosed', v_name || '_closed_idx', v_chunk, v_reg.keycolumn);
+    -- a point column whose row table answers box queries by a GiST index (md_vertex_point_idx on cube(coordinate)):
+    -- the box of each chunk version, GiST-indexed (tgsis.point_chunk_box, an expression: every writer keeps it right),
+    -- and its m by object, for the chunks whose points have fewer coordinates than a box query's axes
+    -- (tgsis.md_vertices_in_box: the cube type's && would need the box's other axes to hold 0)
+    FOR v_c IN SELECT c.name FROM tgsis.chunk_columns(p_table) c WHERE c.role = 'point'
+                  AND EXISTS (SELECT FROM pg_index i JOIN pg_class ic ON ic.oid = i.indexrelid JOIN pg_am am ON am.oid = ic.relam
+                               WHERE i.indrelid = v_storage AND am.amname = 'gist'
+                                 AND pg_get_expr(i.indexprs, i.indrelid) LIKE format('%%(%s)%%', quote_ident(c.name)))
+                ORDER BY c.colorder LOOP
+        EXECUTE format('CREATE INDEX %I ON %s USING gist (tgsis.point_chunk_box(%I))', v_name || '_' || v_c.name || '_box_idx',
+                       v_chunk, v_c.name);
+    END LOOP;
 
     -- comments, generated from the row table's
     EXECUTE format('COMMENT ON TABLE %s IS %L', v_chunk,
@@ -172,4 +188,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.create_chunk_table(text) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.create_chunk_table(text) IS
-    'create tgsis.<table>_chunk, the chunk storage of a model table registered for chunks (tgsis.model_tables.chunkcolumn), per the contract of docs/storage.md: columns from the live storage, lz4 or pglz compression, primary key and revision indexes, comments, the storage''s grants and row-level security, the check of direct inserts (tgsis.chunk_insert_check); TG200 for a table not registered for chunks, TG201 when it exists';
+    'create tgsis.<table>_chunk, the chunk storage of a model table registered for chunks (tgsis.model_tables.chunkcolumn), per the contract of docs/storage.md: columns from the live storage, lz4 or pglz compression, primary key and revision indexes (and a point column''s box index when its row table has a GiST index over it), comments, the storage''s grants and row-level security, the check of direct inserts (tgsis.chunk_insert_check); TG200 for a table not registered for chunks, TG201 when it exists';
