@@ -82,8 +82,8 @@ def _by_face(conn: Conn, geoid: int, axes: list[str], low: list[float], high: li
 
     (Not the rows' GiST index: among the 1,024 NaN points of ``_object(nan=True)`` it missed valid points, PostgreSQL
     15: the NaN keys spoil its inner boxes; docs/storage.md, "The points in chunks".)"""
-    conn.execute("SET enable_indexscan = off")
-    conn.execute("SET enable_bitmapscan = off")
+    conn.execute("SET enable_indexscan = off; SET jit = off")
+    conn.execute("SET enable_bitmapscan = off; SET jit = off")
     try:
         with conn.cursor(binary=True) as cursor:
             return cursor.execute(
@@ -94,8 +94,7 @@ def _by_face(conn: Conn, geoid: int, axes: list[str], low: list[float], high: li
                 (geoid, axes, [float(v) for v in low], [float(v) for v in high]),
             ).fetchall()
     finally:
-        conn.execute("RESET enable_indexscan")
-        conn.execute("RESET enable_bitmapscan")
+        conn.execute("RESET enable_indexscan; RESET enable_bitmapscan; RESET jit")
 
 
 def _all_boxes(conn: Conn, geoid: int) -> list[list[tuple[Any, ...]]]:
