@@ -74,6 +74,7 @@ _NAMED_IN_DOCS = frozenset(
         "drop_property",
         "enable_versioning",
         "enable_versioning_rel",
+        "evolving_chunk_vertices",
         "evolving_frame",
         "evolving_instants",
         "evolving_satisfied",

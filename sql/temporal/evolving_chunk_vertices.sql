@@ -42,8 +42,9 @@ BEGIN
 END
 $$;
 
-REVOKE ALL ON FUNCTION tgsis.evolving_chunk_vertices(bigint, double precision, double precision, double precision, double precision) FROM PUBLIC;
-GRANT EXECUTE ON FUNCTION tgsis.evolving_chunk_vertices(bigint, double precision, double precision, double precision, double precision) TO tgsis_reader;
+-- executable by PUBLIC, as tgsis.vertices_at is: the executor checks EXECUTE on every function a query names when
+-- it starts the query, whether the branch that calls it runs or not (a role outside tgsis_reader calling
+-- vertices_at was refused 42501 on rows too); it runs as its caller, who reads the view only with its own rights
 
 COMMENT ON FUNCTION tgsis.evolving_chunk_vertices(bigint, double precision, double precision, double precision, double precision) IS
     'model 3''s node positions (vrtxid, x, y, z) in period timem at the frame (t0, t1, w) of tgsis.evolving_frame, read from the aligned chunk arrays of tgsis.d4dvrtx_arrays (t0 = t1: the stored positions; t0 < t1: x0 + w (x1 - x0) per slot present at both, the bits of the rows'' join); called by tgsis.vertices_at while tgsis.d4dvrtx is stored in chunks and the caller may read that view';

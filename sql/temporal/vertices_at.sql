@@ -34,9 +34,7 @@ PARALLEL SAFE
 AS $$
     WITH f AS MATERIALIZED (SELECT * FROM tgsis.evolving_frame(p_geoid, p_t)),
     c AS MATERIALIZED (  -- d4dvrtx in chunks and its arrays readable by the caller: model 3 from the arrays
-        SELECT coalesce(has_table_privilege(to_regclass('tgsis.d4dvrtx_arrays'), 'SELECT')
-                        AND has_function_privilege('tgsis.evolving_chunk_vertices(bigint, double precision, double precision, double precision, double precision)',
-                                                   'EXECUTE'), false) AS arrays
+        SELECT coalesce(has_table_privilege(to_regclass('tgsis.d4dvrtx_arrays'), 'SELECT'), false) AS arrays
     )
     SELECT s.vrtxid, s.x, s.y, s.z
       FROM tgsis.evolving_chunk_vertices(p_geoid, (SELECT f.timem FROM f), (SELECT f.t0 FROM f), (SELECT f.t1 FROM f),
