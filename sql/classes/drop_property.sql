@@ -43,10 +43,11 @@ BEGIN
     -- the last property column of a table in chunks: a chunk would hold nothing (tgsis.chunk_columns refuses it), so
     -- the class goes back to rows first (tgsis.store_class_in_rows, verified), the column is dropped from the rows,
     -- and a table of the class that keeps properties goes back to chunks (docs/storage.md, "Property chunks by
-    -- default: the rule": a table without a property column is rows)
+    -- default: the rule": a table without a property column is rows); to_regclass, not a cast: an IF's AND is not
+    -- evaluated in order, and the shape of a rows table does not exist
     IF v_prop.kind = 'cell' AND tgsis.stored_in_chunks(v_class.schemaname, v_prop.tablename)
        AND NOT EXISTS (SELECT FROM pg_attribute a
-                        WHERE a.attrelid = tgsis.chunk_relation(format('%I.%I', v_class.schemaname, v_prop.tablename), '_shape')::regclass
+                        WHERE a.attrelid = to_regclass(tgsis.chunk_relation(format('%I.%I', v_class.schemaname, v_prop.tablename), '_shape'))
                           AND a.attnum > 0 AND NOT a.attisdropped AND a.attname <> p_name
                           AND a.attname NOT IN ('_geoid', '_idx')) THEN
         BEGIN
