@@ -34,7 +34,7 @@
 -- tgsis, or its chunk table is not the caller's to read (a role granted the
 -- faces only). Names come from the catalog (%I, %L), never the caller's text.
 CREATE FUNCTION tgsis.gmap_chunk_arrays_sql(p_dart regclass, p_alpha regclass, p_point text, p_period text)
-RETURNS TABLE (arrays text, size integer, dartset integer[], alphaset integer[])
+RETURNS TABLE (arrays text, size integer, dartset integer[], alphaset integer[], numbering text)
 LANGUAGE plpgsql
 STABLE
 SET search_path FROM CURRENT
@@ -98,9 +98,27 @@ BEGIN
         CASE WHEN p_period IS NULL THEN 'NULL::double precision[]'
              ELSE format('array_agg((array_replace(c.%1$I, NULL, 0) || array_fill(0::double precision, ARRAY[greatest($9 - cardinality(c.%1$I), 0)]))[1:$9] ORDER BY c.chunk)', p_period) END,
         format('tgsis.%I', v_dart || '_chunk'), format('tgsis.%I', v_dart || '_chunk'), format(v_vis, '$7'));
+    -- the darts' numbering from the chunk rows (what tgsis.gmap_conditions asks before the proof): a chunk's
+    -- present slots are its point array's length less its NULLs, its first and last the array's ends unless a
+    -- hole lies there; several periods unless every chunk holds one value (array_positions: float8's =, as
+    -- min < max compares) and all chunks the same. Parameters: $1 geoid, $2 the darts' viewing set.
+    numbering := format(
+        'SELECT min(c.chunk * %1$s + f.first - 1), max(c.chunk * %1$s + f.last - 1), coalesce(sum(f.present), 0)::bigint, %2$s '
+        '  FROM %3$s c '
+        ' CROSS JOIN LATERAL (SELECT cardinality(c.%4$I) - cardinality(array_positions(c.%4$I, NULL)) AS present, '
+        '                            CASE WHEN c.%4$I[1] IS NOT NULL THEN 1 '
+        '                                 ELSE (SELECT min(u.o) FROM unnest(c.%4$I) WITH ORDINALITY AS u (x, o) WHERE u.x IS NOT NULL) END AS first, '
+        '                            CASE WHEN c.%4$I[cardinality(c.%4$I)] IS NOT NULL THEN cardinality(c.%4$I) '
+        '                                 ELSE (SELECT max(u.o) FROM unnest(c.%4$I) WITH ORDINALITY AS u (x, o) WHERE u.x IS NOT NULL) END AS last) AS f '
+        ' WHERE (SELECT tgsis.chunk_snapshot_guard(%5$L::regclass)) AND c.geoid = $1 AND %6$s',
+        size,
+        CASE WHEN p_period IS NULL THEN 'false'
+             ELSE format('count(DISTINCT c.%1$I[f.first]) > 1 '
+                         'OR bool_or(f.present > 0 AND cardinality(array_positions(c.%1$I, c.%1$I[f.first])) <> f.present)', p_period) END,
+        format('tgsis.%I', v_dart || '_chunk'), p_point, format('tgsis.%I', v_dart || '_chunk'), format(v_vis, '$2'));
     RETURN NEXT;
 END
 $$;
 
 COMMENT ON FUNCTION tgsis.gmap_chunk_arrays_sql(regclass, regclass, text, text) IS
-    'the statement (with its chunk size and viewing sets) that reads a G-map''s involutions, points and periods from their chunk tables as 2-D arrays, a row per chunk version (and level), with each row''s vbase (tgsis.gmap_dart_tests'' layout ARRAY[k, s]; shape: the chunks and slots are exactly those of darts lo..hi), as the caller; no row when either table is stored as rows or its chunk table is not the caller''s to read; what tgsis.gmap_conditions_hold reads on chunks';
+    'the statement (with its chunk size and viewing sets) that reads a G-map''s involutions, points and periods from their chunk tables as 2-D arrays, a row per chunk version (and level), with each row''s vbase (tgsis.gmap_dart_tests'' layout ARRAY[k, s]; shape: the chunks and slots are exactly those of darts lo..hi), as the caller; no row when either table is stored as rows or its chunk table is not the caller''s to read; what tgsis.gmap_conditions_hold reads on chunks; numbering: the statement giving the darts'' first and last id, their number and whether they lie in several periods from the chunk rows (what tgsis.gmap_conditions asks first)';
