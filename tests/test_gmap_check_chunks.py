@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 import psycopg
 import pytest
+from psycopg import sql
 
 import tgsis
 from tests.test_gmap_check import _evolving
@@ -48,8 +49,8 @@ def _switch(conn: Conn, to: str) -> None:
 
 
 def _store(conn: Conn) -> tuple[int, int]:
-    """A model-4 map of two periods (1,152 + 144 darts: two chunks, the second one part full, then a third)
-    and a model-5 one of 1,152 darts."""
+    """A model-4 map of two periods (1,152 + 144 darts: two chunks, the second one part full) and a model-5 one
+    of 1,152 darts."""
     fc4 = F.create_feature_class(conn, "blocks", "GMAP", time_model="GMAP", cell_level=3)
     g4 = F.insert_feature(conn, fc4, _evolving(), tolerance=100.0)
     fc5 = F.create_feature_class(conn, "knowledge", "GMAP", time_model="MULTIDIM", cell_level=3)
@@ -171,3 +172,21 @@ def test_a_role_granted_the_faces_only_reads_them(db_dsn: str, conn: Conn) -> No
         assert not _chunk_path(reader, MODEL4)
         assert reader.execute("SELECT count(*) FROM tgsis.gmap_check(%s)", (g4,)).fetchone() == (0,)
         assert reader.execute("SELECT count(*) FROM tgsis.md_check(%s)", (g5,)).fetchone() == (0,)
+
+
+@pytest.mark.parametrize("deleted", [(), (0,), (1151,), (0, 500, 1023, 1024, 1295), tuple(range(1024, 1296))])
+def test_the_darts_numbering_from_the_chunk_rows_is_the_faces(conn: Conn, deleted: tuple[int, ...]) -> None:
+    """First and last id, how many, several periods: from the chunk rows as through the face, holes at either end."""
+    g4, _ = _store(conn)
+    _switch(conn, "chunks")
+    if deleted:
+        conn.execute("DELETE FROM tgsis.gmap_dart WHERE geoid = %s AND dartid = ANY (%s)", (g4, list(deleted)))
+    face = conn.execute(
+        "SELECT min(dartid), max(dartid), count(*), min(timem) < max(timem) FROM tgsis.gmap_dart WHERE geoid = %s",
+        (g4,),
+    ).fetchone()
+    row = conn.execute("SELECT numbering FROM tgsis.gmap_chunk_arrays_sql(%s, %s, %s, %s)", MODEL4).fetchone()
+    assert row is not None and row[0] is not None
+    conn.execute(sql.SQL("PREPARE numbering (bigint, integer[]) AS {}").format(sql.SQL(row[0])))
+    assert conn.execute(sql.SQL("EXECUTE numbering ({}, NULL)").format(sql.Literal(g4))).fetchone() == face
+    assert face is not None and face[3] is (len(deleted) < 272)  # the second period's darts are 1152..1295
