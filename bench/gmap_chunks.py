@@ -15,7 +15,10 @@ client did before plan K; ``store_server_path``). Bytes are
 the map stored once more, after a VACUUM, divided by the darts; the points,
 nodes and cells stay rows and are left out. Times are medians of
 ``--repeat`` runs of each side, rows first (not interleaved: the switch
-lies between them).
+lies between them). On chunks the check is timed twice: as the bench's
+superuser (``gmap_conditions_hold`` reads the chunk arrays) and as a role
+granted the faces only (it reads the faces, as every role did before plan
+N, G).
 
     python bench/gmap_chunks.py [--cubes 13 --repeat 3]    # TGSIS_PG=system|embedded
 """
@@ -131,6 +134,16 @@ def main() -> None:
                 "check": t_check,
                 **{f"bytes_{t}": float(size[t]) for t in TABLES},
             }
+            if storage == "chunks":  # the check through the faces (before plan N, G), as a role granted them only
+                conn.execute("CREATE ROLE bench_faces_only IN ROLE tgsis_reader")
+                for name in storage_names(conn).values():
+                    revoke = sql.SQL("REVOKE SELECT ON {} FROM tgsis_reader").format(sql.SQL(name))  # type: ignore[arg-type]
+                    conn.execute(revoke)
+                conn.execute("SET ROLE bench_faces_only")
+                conn.commit()
+                results[storage]["check_faces"] = timed(check, args.repeat)
+                conn.execute("RESET ROLE")
+                conn.commit()
             if storage == "chunks":  # the server's set-based path (the client's upload declining), for the ratio
                 client_upload = G.upload_rows  # (insert_gmap's name for it)
                 G.upload_rows = lambda *args: False  # type: ignore[assignment]
@@ -164,6 +177,7 @@ def main() -> None:
     print(f"store_chunks_client_vs_server_path: {chunks['store'] / chunks['store_server_path']:.3f}")
     print(f"fetch_chunks_vs_rows: {chunks['fetch'] / rows['fetch']:.2f}")
     print(f"gmap_check_chunks_vs_rows: {chunks['check'] / rows['check']:.2f}")
+    print(f"gmap_check_chunks_through_faces_vs_rows: {chunks['check_faces'] / rows['check']:.2f}")
     assert np.isfinite(both["chunks"])
 
 

@@ -98,6 +98,7 @@ _NAMED_IN_DOCS = frozenset(
         "gmap_at",
         "gmap_cells",
         "gmap_check",
+        "gmap_chunk_arrays_sql",
         "gmap_conditions_by_arrays",
         "gmap_conditions_by_rows",
         "gmap_conditions_hold",

@@ -30,6 +30,8 @@ DECLARE
     v_several boolean;
     v_alpha   integer[];
     v_missing text;
+    v_numbering text;
+    v_dartset integer[];
 BEGIN
     -- the function is callable by anyone: arguments that name no G-map's
     -- darts and involutions get an error of ours, not a missing column deep
@@ -51,10 +53,16 @@ BEGIN
                   HINT = 'tgsis.gmap_check(geoid) (model 4) and tgsis.md_check(geoid) (model 5) check a stored G-map';
     END IF;
     -- one scan of the darts for what both paths need: their numbering and
-    -- whether they lie in more than one period
-    EXECUTE format('SELECT min(dartid), max(dartid), count(*), %s FROM %s WHERE geoid = $1',
-                   CASE WHEN p_period IS NULL THEN 'false' ELSE format('min(%1$I) < max(%1$I)', p_period) END, p_dart)
-       INTO v_lo, v_hi, v_darts, v_several USING p_geoid;
+    -- whether they lie in more than one period (from the chunk rows when the darts are in chunks the caller reads:
+    -- tgsis.gmap_chunk_arrays_sql; the face would decode every dart)
+    SELECT c.numbering, c.dartset INTO v_numbering, v_dartset FROM tgsis.gmap_chunk_arrays_sql(p_dart, p_alpha, p_point, p_period) AS c;
+    IF v_numbering IS NOT NULL THEN
+        EXECUTE v_numbering INTO v_lo, v_hi, v_darts, v_several USING p_geoid, v_dartset;
+    ELSE
+        EXECUTE format('SELECT min(dartid), max(dartid), count(*), %s FROM %s WHERE geoid = $1',
+                       CASE WHEN p_period IS NULL THEN 'false' ELSE format('min(%1$I) < max(%1$I)', p_period) END, p_dart)
+           INTO v_lo, v_hi, v_darts, v_several USING p_geoid;
+    END IF;
     -- a valid map ends here; the paths below say what is wrong
     IF tgsis.gmap_conditions_hold(p_geoid, p_n, p_dart, p_alpha, p_point, p_period, v_lo, v_hi, v_darts, v_several) THEN
         RETURN;

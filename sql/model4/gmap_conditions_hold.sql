@@ -29,6 +29,15 @@
 -- enable_sort off: the rows in key order come from the primary key, never
 -- from a sort (tables just loaded have no statistics; the planner would
 -- sort 18M rows on disk).
+-- Darts and involutions stored in chunks (docs/storage.md, "G-maps"): the
+-- faces would decode every slot and sort the involutions by (dartid,
+-- level), which the chunk keys (geoid, level, chunk) do not give in order
+-- (3.2x rows on 8^3 cubes). The arrays are then the chunk tables' own
+-- (tgsis.gmap_chunk_arrays_sql: a row per chunk version the session sees,
+-- with its vbase; only the chunk rows are sorted), and the same tests are
+-- made on that layout (tgsis.gmap_dart_tests' ARRAY[k, s]). Read as the
+-- caller, under the chunk tables' row-level security (the faces when the
+-- caller may read the faces only).
 CREATE FUNCTION tgsis.gmap_conditions_hold(p_geoid bigint, p_n integer, p_dart regclass, p_alpha regclass, p_point text,
                                            p_period text, p_lo bigint, p_hi bigint, p_darts bigint, p_several boolean)
 RETURNS boolean
@@ -45,9 +54,28 @@ DECLARE
     v_arrays  text;
     v_tests   text[];
     v_holds   boolean;
+    v_chunks  record;
+    v_k       integer;
+    v_derived text;
 BEGIN
     IF coalesce(p_darts, 0) = 0 OR p_hi - p_lo + 1 <> p_darts OR p_darts * v_stride > 134217728 THEN
         RETURN false;
+    END IF;
+    SELECT * INTO v_chunks FROM tgsis.gmap_chunk_arrays_sql(p_dart, p_alpha, p_point, CASE WHEN v_several THEN p_period END);
+    IF v_chunks.arrays IS NOT NULL AND p_lo >= 0 THEN
+        -- the chunks lo / s .. hi / s, k of them, a row each (and per level); base: the first one's first id
+        v_k := (p_hi / v_chunks.size - p_lo / v_chunks.size + 1)::integer;
+        SELECT t.columns, t.tests, t.derived INTO v_columns, v_tests, v_derived
+          FROM tgsis.gmap_dart_tests(p_n, v_several, 's.a', 's.p', 's.r', false, ARRAY[v_k, v_chunks.size]) AS t;
+        EXECUTE format('SELECT s.shape AND NOT EXISTS (SELECT FROM (SELECT *, %s FROM (SELECT %s FROM generate_series(($3 - $5)::integer, ($4 - $5)::integer) AS b
+                                                                                     OFFSET 0) AS d0 OFFSET 0) AS d
+                                                        WHERE (%s) IS NOT TRUE)
+                          FROM (%s OFFSET 0) AS s',
+                       v_derived, v_columns, array_to_string(v_tests, ' AND '), v_chunks.arrays)
+           INTO v_holds
+          USING p_geoid, p_n, p_lo, p_hi, (p_lo / v_chunks.size) * v_chunks.size, v_k,
+                v_chunks.dartset, v_chunks.alphaset, v_chunks.size, p_darts;
+        RETURN coalesce(v_holds, false);
     END IF;
     -- every alpha row's dart is one of lo..hi (the key's ends: no scan)
     EXECUTE format('SELECT min(dartid) >= $2 AND max(dartid) <= $3 FROM %s WHERE geoid = $1', p_alpha)
