@@ -61,6 +61,7 @@ _NAMED_IN_DOCS = frozenset(
         "create_revision_indexes",
         "create_version",
         "create_versioned_view",
+        "cube_has_nan",
         "delete_geometry",
         "delete_instant",
         "delete_object_rows",

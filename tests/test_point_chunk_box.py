@@ -81,7 +81,8 @@ def _by_face(conn: Conn, geoid: int, axes: list[str], low: list[float], high: li
     """The rows' test of tgsis.md_vertices_in_box over the face by a sequential scan: what the chunk path must answer.
 
     (Not the rows' GiST index: among the 1,024 NaN points of ``_object(nan=True)`` it missed valid points, PostgreSQL
-    15: the NaN keys spoil its inner boxes; docs/storage.md, "The points in chunks".)"""
+    15, until it was made partial: the NaN keys spoiled its inner boxes; docs/storage.md, "NaN coordinates and the box
+    indexes", tests/test_nan_boxes.py.)"""
     conn.execute("SET enable_indexscan = off; SET jit = off")
     conn.execute("SET enable_bitmapscan = off; SET jit = off")
     try:

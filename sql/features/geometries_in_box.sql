@@ -11,9 +11,10 @@ AS $$
     SELECT geoid
       FROM tgsis.geometry
      WHERE bbox && cube(ARRAY[p_xmin, p_ymin, p_zmin], ARRAY[p_xmax, p_ymax, p_zmax])
+       AND NOT tgsis.cube_has_nan(bbox)  -- the index's predicate: a box with a NaN is in no box, by any plan
      ORDER BY geoid
 $$;
 
 COMMENT ON FUNCTION tgsis.geometries_in_box(double precision, double precision, double precision,
                                             double precision, double precision, double precision) IS
-    'ids of the geometries whose 3D bounding box intersects the given box (GiST index scan on tgsis.geometry.bbox)';
+    'ids of the geometries whose 3D bounding box intersects the given box (GiST index scan on tgsis.geometry.bbox); a bounding box with a NaN coordinate (a vertex with a NaN, which tgsis.check_geometry reports) meets no box';

@@ -43,7 +43,9 @@ BEGIN
     -- which geotypes each time model has: from the registry (tgsis.geometry_kind_check)
     EXECUTE format('ALTER TABLE tgsis.geometry ADD CONSTRAINT geometry_kind CHECK (%s)', tgsis.geometry_kind_check());
 
-    CREATE INDEX geometry_bbox_idx ON tgsis.geometry USING gist (bbox);
+    -- partial: a box with a NaN would spoil the index's inner boxes (tgsis.cube_has_nan says why); such a box is
+    -- in no box query (tgsis.geometries_in_box carries the predicate)
+    CREATE INDEX geometry_bbox_idx ON tgsis.geometry USING gist (bbox) WHERE NOT tgsis.cube_has_nan(bbox);
     -- finds the members of a collection (delete_geometry, and the foreign-key check when a collection is deleted)
     CREATE INDEX geometry_collection_idx ON tgsis.geometry (collection) WHERE collection IS NOT NULL;
 

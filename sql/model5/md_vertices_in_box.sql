@@ -9,7 +9,10 @@
 -- comparisons would otherwise put it inside any box on that axis by a
 -- sequential scan but not always by the index (among 50,000 points, one of
 -- NaNs only was found by a scan and missed by the index: the answer hung on
--- the plan; tests/test_gmap_multidim.py forces both plans). A point whose
+-- the plan; tests/test_gmap_multidim.py forces both plans; and NaN keys
+-- spoiled the index's inner boxes, so that it missed valid points: the index
+-- is partial, leaving NaN points out, and the query below carries its
+-- predicate; tests/test_nan_boxes.py). A point whose
 -- number of coordinates is not the G-map's (tgsis.check_md_geometry reports
 -- it) is in no box either: the cube type's <@ ignores a box's axes beyond a
 -- point's, its GiST index does not (the answer hung on the plan again).

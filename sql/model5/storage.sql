@@ -25,7 +25,9 @@ BEGIN
         CONSTRAINT md_gmap_axes CHECK (cardinality(axes) = embedding AND array_position(axes, NULL) IS NULL),
         CONSTRAINT md_gmap_extent CHECK (extent IS NULL OR cube_dim(extent) = embedding)
     );
-    CREATE INDEX md_gmap_extent_idx ON tgsis.md_gmap USING gist (extent);
+    -- partial: an extent with a NaN (measured so before 0.3.0, kept in a versioned database) would spoil the index's
+    -- inner boxes (tgsis.cube_has_nan says why); it is in no box query (tgsis.md_in_box carries the predicate)
+    CREATE INDEX md_gmap_extent_idx ON tgsis.md_gmap USING gist (extent) WHERE NOT tgsis.cube_has_nan(extent);
 
     COMMENT ON TABLE tgsis.md_gmap IS 'model 5: one row per multiply indexed G-map (tgsis.geometry, time model MULTIDIM): its dimensions, axes and extent';
     COMMENT ON COLUMN tgsis.md_gmap.geoid IS 'geometry (tgsis.geometry.geoid)';
@@ -43,8 +45,13 @@ BEGIN
                                                AND array_position(coordinate, NULL) IS NULL),
         PRIMARY KEY (geoid, vrtxid)
     );
-    -- points of an object inside a box over any of its axes (the other axes unbounded)
-    CREATE INDEX md_vertex_point_idx ON tgsis.md_vertex USING gist (cube(coordinate));
+    -- points of an object inside a box over any of its axes (the other axes unbounded); partial: a point with a
+    -- NaN coordinate is in no box, and its key would spoil the index's inner boxes (the cube type's least and
+    -- greatest of a NaN are the other operand's, by order of the comparison), so that an index scan missed valid
+    -- points a sequential scan found (docs/storage.md, "NaN coordinates and the box indexes");
+    -- tgsis.md_vertices_in_box carries the same predicate
+    CREATE INDEX md_vertex_point_idx ON tgsis.md_vertex USING gist (cube(coordinate))
+        WHERE NOT 'NaN'::double precision = ANY (coordinate);
 
     COMMENT ON TABLE tgsis.md_vertex IS 'model 5: the points of the embedding (the spec''s vertex relation)';
     COMMENT ON COLUMN tgsis.md_vertex.geoid IS 'geometry (tgsis.geometry.geoid)';
