@@ -26,6 +26,7 @@ import tgsis
 from tests.conftest import BuiltOnce, cloned_or_built
 from tests.merge_data import curved_surface
 from tests.roles import login_roles
+from tests.storage_data import storage_of
 from tgsis.db import _merge_states
 from tgsis.db import features as F
 from tgsis.db._static import SIMPLEX
@@ -396,7 +397,8 @@ def test_a_role_that_may_read_the_views_but_not_the_storage_reads_the_same_state
     cell_table = faults.property_table("CELL")
     assert cell_table is not None
     owner = fast_states(conn, version, geoid)
-    conn.execute(sql.SQL("REVOKE SELECT ON {} FROM tgsis_reader").format(faults.qualified(cell_table + "_ver")))
+    storage = storage_of(conn, cell_table, faults.schema)  # <table>_ver, or its chunk table
+    conn.execute(f"REVOKE SELECT ON {storage} FROM tgsis_reader")
     conn.commit()
     with login_roles(db_dsn, {"rita": "tgsis_reader"}) as made:
         rita = made.connect("rita")

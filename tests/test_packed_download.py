@@ -47,6 +47,16 @@ def _surface(side: int = 5) -> Surface:
 
 @pytest.fixture
 def horizons(conn: Conn) -> F.FeatureClass:
+    """A class whose property table is rows whatever model 1's storage (these tests read and write the row table
+    as a psql user would; property chunks have their own tests: tests/test_property_chunk_transfer.py)."""
+    conn.execute("SET tgsis.storage = rows")
+    try:
+        return _horizons(conn)
+    finally:
+        conn.execute("RESET tgsis.storage")
+
+
+def _horizons(conn: Conn) -> F.FeatureClass:
     return F.create_feature_class(
         conn,
         "horizon",

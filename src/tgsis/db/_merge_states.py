@@ -253,10 +253,13 @@ def _readable_storages(conn: Conn, tables: list[_Table]) -> list[str] | None:
     and the merge tell apart by key and content as they do a rewritten row.
 
     A role that may read a view but not its storage (a grant made on the
-    view only) reads as before: three full reads through the views.
+    view only; for a table in chunks, the chunk table as well as its decoded
+    view, which reads it with its owner's rights) reads as before: three full
+    reads through the views.
     """
     rows = conn.execute(
         "SELECT s.storage, t.objectkeyfield IS NOT DISTINCT FROM k.key AND has_table_privilege(s.storage, 'SELECT')"
+        "       AND has_table_privilege(tgsis.storage_table(k.schemaname, k.tablename), 'SELECT')"
         "  FROM unnest(%s::text[], %s::text[], %s::text[]) WITH ORDINALITY AS k(schemaname, tablename, key, n)"
         "  LEFT JOIN tgsis.versioned_tables t ON t.schemaname = k.schemaname AND t.tablename = k.tablename"
         "  CROSS JOIN LATERAL (SELECT CASE WHEN tgsis.stored_in_chunks(k.schemaname, k.tablename)"
