@@ -230,14 +230,14 @@ def rewrites_same_values(conn: Conn, table: str = "vrtx") -> bool:
 def stored_unit(conn: Conn, schema: str, table: str) -> Callable[[tuple[str, ...]], tuple[str, ...]]:
     """The key of the stored version holding a row, from the row's key (``versioned_tables.keycolumns``, as text).
 
-    Rows: the row key itself. A model table stored in chunks: its ``tgsis.storage_key`` (the local id replaced
-    by its chunk, id div ``tgsis.model_tables.chunksize``), so that "the rows a merge wrote" reads as "the
+    Rows: the row key itself. A model or class table stored in chunks: its ``tgsis.storage_key`` (the local id
+    replaced by its chunk, id div the chunk size of ``tgsis.chunk_registry``), so that "the rows a merge wrote" reads as "the
     chunk versions holding them" (docs/storage.md, "What differs from rows").
     """
     row = conn.execute(
-        "SELECT v.keycolumns, tgsis.storage_key(v), m.chunksize FROM tgsis.versioned_tables v "
-        "LEFT JOIN tgsis.model_tables m ON v.schemaname = 'tgsis' AND m.tablename = v.tablename "
-        "WHERE v.schemaname = %s AND v.tablename = %s",
+        "SELECT v.keycolumns, tgsis.storage_key(v), (SELECT r.chunksize FROM tgsis.chunk_registry("
+        "           CASE WHEN v.schemaname = 'tgsis' THEN v.tablename ELSE format('%%I.%%I', v.schemaname, v.tablename) END) r)"
+        "  FROM tgsis.versioned_tables v WHERE v.schemaname = %s AND v.tablename = %s",
         (schema, table),
     ).fetchone()
     assert row is not None, f"{schema}.{table} is not versioned"

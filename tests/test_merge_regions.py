@@ -566,8 +566,9 @@ def test_the_merge_writes_into_the_parent_exactly_the_rows_the_child_changed(con
         assert closed == changed & {unit(k) for k in before[table]}, table
     vrtx = units["tgsis", "vrtx"]
     assert written["tgsis", "vrtx"][0] == {vrtx((str(fault), str(i))) for i in NORTH}  # the child's moves, not SOUTH
-    assert written[fc.schema, vertex_table][0] == {(str(fault), "30"), (str(fault), "31")}
-    assert written[fc.schema, cell_table][0] == {(str(fault), "5")}
+    on_vertex, on_cell = units[fc.schema, vertex_table], units[fc.schema, cell_table]  # rows, or their chunks
+    assert written[fc.schema, vertex_table][0] == {on_vertex((str(fault), "30")), on_vertex((str(fault), "31"))}
+    assert written[fc.schema, cell_table][0] == {on_cell((str(fault), "5"))}
     assert written["tgsis", "trgl"] == (set(), set())
     (merged,) = result.objects
     assert int(result) - merged.rows_written == sum(len(n) + len(c) for n, c in written.values())
