@@ -62,7 +62,9 @@ BEGIN
             v_arrays := v_arrays || ARRAY(SELECT format('%s.%I[:][%s:%s]', v_a, v_c.name, i, i) FROM generate_series(1, v_c.size) AS i
                                            ORDER BY i);
             v_alias := v_alias || ARRAY(SELECT quote_ident(v_c.name || '#' || i) FROM generate_series(1, v_c.size) AS i ORDER BY i);
-            v_select := v_select || format('CASE WHEN %1$s.%2$I IS NULL THEN tgsis.chunk_array_missing(%3$L, %4$L, NULL::%5$s[]) '
+            -- (the array itself as the value argument, not a NULL constant: a call of constants only is a STABLE
+            -- call the planner may evaluate to estimate an expression, which raised 40001 on chunks of no NULL array)
+            v_select := v_select || format('CASE WHEN %1$s.%2$I IS NULL THEN tgsis.chunk_array_missing(%3$L, %4$L, %1$s.%2$I) '
                                            'WHEN u.%6$I IS NULL THEN NULL ELSE ARRAY[%7$s] END AS %2$I',
                                            v_a, v_c.name, p_table, v_c.name, v_c.typename, v_c.name || '#1',
                                            (SELECT string_agg(format('u.%I', v_c.name || '#' || i), ', ' ORDER BY i)
