@@ -70,6 +70,26 @@ def test_a_static_class_is_made_in_chunks_when_model_1_is(conn: Conn) -> None:
     assert conn.execute("SELECT count(*) FROM tgsis.catalog WHERE classname = 'typo'").fetchone() == (0,)
 
 
+@pytest.mark.storage("chunks")
+def test_a_class_in_a_schema_of_an_odd_name_is_made_in_chunks(conn: Conn) -> None:
+    """The schema's name read as text, not cast to regnamespace (which parses it as an identifier: 42602)."""
+    conn.execute('CREATE SCHEMA "Odd ""Schema"""')
+    tgsis.create_feature_class(
+        conn,
+        "odd",
+        "SURFACE",
+        cell_properties=[("porosity", "double precision"), {"name": "facies", "type": "integer", "alignment": "CELL"}],
+        schema='Odd "Schema"',
+    )
+    assert conn.execute("SELECT tgsis.stored_in_chunks('Odd \"Schema\"', 'odd_cellpros')").fetchone() == (True,)
+    surface = curved_surface()
+    geoid = F.insert_feature(conn, "odd", surface)
+    _same_feature(conn, "odd", geoid, surface)
+    conn.execute("SELECT tgsis.store_class_in_rows('odd')")
+    conn.execute("SELECT tgsis.store_class_in_chunks('odd')")
+    _same_feature(conn, "odd", geoid, surface)
+
+
 @pytest.mark.storage("rows")
 def test_class_tables_stay_rows_when_model_1_is_rows(conn: Conn) -> None:
     tgsis.create_feature_class(conn, "layer", "SURFACE", cell_properties=[("porosity", "double precision")])

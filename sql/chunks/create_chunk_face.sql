@@ -70,7 +70,7 @@ BEGIN
     -- table (its owner the chunk table's, its comment ours: made again), never a user's (CREATE OR REPLACE would
     -- put the face's body in a user's function, or fail on one of another owner)
     IF EXISTS (SELECT FROM pg_proc p
-                WHERE p.pronamespace = v_reg.schemaname::regnamespace AND p.proname = v_reg.tablename || '_face_row'
+                WHERE p.pronamespace = (SELECT n.oid FROM pg_namespace n WHERE n.nspname = v_reg.schemaname) AND p.proname = v_reg.tablename || '_face_row'
                   AND p.pronargs = 0
                   AND (p.proowner <> (SELECT c.relowner FROM pg_class c WHERE c.oid = v_chunk)
                        OR coalesce(obj_description(p.oid, 'pg_proc'), '') NOT LIKE 'row-level INSTEAD OF trigger of the face of %')) THEN

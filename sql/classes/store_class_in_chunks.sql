@@ -186,7 +186,7 @@ BEGIN
             EXECUTE format('DROP FUNCTION %I.%I()', v_class.schemaname, v_tab || '_ver_write');
             EXECUTE format('DROP TABLE %I.%I', v_class.schemaname, v_tab || '_ver_queue');
             FOR v_proc IN SELECT p.oid::regprocedure::text FROM pg_proc p
-                           WHERE p.pronamespace = v_class.schemaname::regnamespace AND p.proname = v_tab || '_ver_run' LOOP
+                           WHERE p.pronamespace = (SELECT n.oid FROM pg_namespace n WHERE n.nspname = v_class.schemaname) AND p.proname = v_tab || '_ver_run' LOOP
                 EXECUTE format('DROP FUNCTION %s', v_proc);
             END LOOP;
         END IF;
