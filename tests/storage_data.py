@@ -83,6 +83,13 @@ def tables_as_rows(conn: Conn, tables: tuple[str, ...]) -> None:
     conn.commit()
 
 
+def switch_tables(conn: Conn, tables: tuple[str, ...], to: str) -> None:
+    """Each model table ``tgsis.<t>`` of ``tables`` stored in ``to`` (chunks: in order; rows: last first), committed."""
+    for table in tables if to == "chunks" else reversed(tables):
+        conn.execute(f"SELECT tgsis.store_in_{to}(%s)", (table,))
+    conn.commit()
+
+
 def classes_as_rows(dsn: str) -> None:
     """The classes of the database of ``dsn`` as rows: those it has (a set-up built once, e.g. ``fault_clone``)
     stored as rows (``tgsis.store_class_in_rows``), new ones made so in every later session

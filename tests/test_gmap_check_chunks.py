@@ -18,6 +18,7 @@ import pytest
 from psycopg import sql
 
 import tgsis
+from tests.storage_data import switch_tables, tables_as_rows
 from tests.test_gmap_check import _evolving
 from tests.test_gmap_check import _holds as _holds_as_read
 from tgsis import gmaps
@@ -36,16 +37,11 @@ MODEL5 = ("tgsis.md_dart", "tgsis.md_alpha", "vrtxid", None)
 @pytest.fixture(autouse=True)
 def _gmaps_as_rows(conn: Conn) -> None:
     """The G-map tables as rows at each test's start, whatever TGSIS_TEST_TIME_STORAGE made them."""
-    for table in reversed(TABLES):
-        if conn.execute("SELECT tgsis.stored_in_chunks(%s)", (table,)).fetchone() == (True,):
-            conn.execute("SELECT tgsis.store_in_rows(%s)", (table,))
-    conn.commit()
+    tables_as_rows(conn, TABLES)
 
 
 def _switch(conn: Conn, to: str) -> None:
-    for table in TABLES if to == "chunks" else reversed(TABLES):
-        conn.execute(f"SELECT tgsis.store_in_{to}(%s)", (table,))
-    conn.commit()
+    switch_tables(conn, TABLES, to)
 
 
 def _store(conn: Conn) -> tuple[int, int]:

@@ -21,6 +21,7 @@ import pytest
 
 import tgsis
 from tests.merge_data import sqlstate
+from tests.storage_data import switch_tables, tables_as_rows
 from tests.test_gmap_multidim import _class as _md_class
 from tests.test_gmap_multidim import _interpretations
 from tests.test_gmap_storage import _class as _gmap_class
@@ -38,16 +39,11 @@ ASKED = (0.0, 0.5, 1.0, 1.5, 2.0, 3.0, -1.0, 4.0)
 def _gmaps_as_rows(conn: Conn) -> None:
     """The G-map tables as rows at each test's start, whatever TGSIS_TEST_TIME_STORAGE made them: each test
     switches them itself."""
-    for table in reversed(TABLES):
-        if conn.execute("SELECT tgsis.stored_in_chunks(%s)", (table,)).fetchone() == (True,):
-            conn.execute("SELECT tgsis.store_in_rows(%s)", (table,))
-    conn.commit()
+    tables_as_rows(conn, TABLES)
 
 
 def _switch(conn: Conn, to: str) -> None:
-    for table in TABLES if to == "chunks" else reversed(TABLES):
-        conn.execute(f"SELECT tgsis.store_in_{to}(%s)", (table,))
-    conn.commit()
+    switch_tables(conn, TABLES, to)
 
 
 def _store(conn: Conn, versioned: bool) -> tuple[int, int]:

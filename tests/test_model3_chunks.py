@@ -20,6 +20,7 @@ import pytest
 
 import tgsis
 from tests.merge_data import curved_surface, sqlstate
+from tests.storage_data import switch_tables, tables_as_rows
 from tests.test_sql_merge_periods import _period
 from tgsis.temporal import EvolvingSurface, TopologyPeriod
 
@@ -37,16 +38,11 @@ ASKED = (*FIRST, *SECOND, 0.15, 0.5, 1.5, 3.0, -1.0, 6.0, 0.0)
 def _model3_as_rows(conn: Conn) -> None:
     """Model 3's tables as rows at each test's start, whatever TGSIS_TEST_TIME_STORAGE made them: each test
     switches them itself."""
-    for table in reversed(TABLES):
-        if conn.execute("SELECT tgsis.stored_in_chunks(%s)", (table,)).fetchone() == (True,):
-            conn.execute("SELECT tgsis.store_in_rows(%s)", (table,))
-    conn.commit()
+    tables_as_rows(conn, TABLES)
 
 
 def _switch(conn: Conn, to: str) -> None:
-    for table in TABLES if to == "chunks" else reversed(TABLES):
-        conn.execute(f"SELECT tgsis.store_in_{to}(%s)", (table,))
-    conn.commit()
+    switch_tables(conn, TABLES, to)
 
 
 def _class(conn: Conn, versioned: bool) -> None:

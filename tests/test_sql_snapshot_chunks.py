@@ -22,6 +22,7 @@ import pytest
 
 import tgsis
 from tests.merge_data import curved_surface
+from tests.storage_data import switch_tables, tables_as_rows
 from tgsis.temporal import EvolvingSurface, TopologyPeriod
 
 Conn = psycopg.Connection[Any]
@@ -39,16 +40,11 @@ SIDE = 40
 @pytest.fixture(autouse=True)
 def _model3_as_rows(conn: Conn) -> None:
     """Model 3's tables as rows at each test's start, whatever TGSIS_TEST_TIME_STORAGE made them."""
-    for table in reversed(TABLES):
-        if conn.execute("SELECT tgsis.stored_in_chunks(%s)", (table,)).fetchone() == (True,):
-            conn.execute("SELECT tgsis.store_in_rows(%s)", (table,))
-    conn.commit()
+    tables_as_rows(conn, TABLES)
 
 
 def _switch(conn: Conn, to: str) -> None:
-    for table in TABLES if to == "chunks" else reversed(TABLES):
-        conn.execute(f"SELECT tgsis.store_in_{to}(%s)", (table,))
-    conn.commit()
+    switch_tables(conn, TABLES, to)
 
 
 def _period(times: tuple[float, ...], lift: float, first: bool) -> TopologyPeriod:
