@@ -18,9 +18,13 @@ nodes and cells stay rows and are left out. Times are medians of
 lies between them). On chunks the check is timed twice: as the bench's
 superuser (``gmap_conditions_hold`` reads the chunk arrays) and as a role
 granted the faces only (it reads the faces, as every role did before plan
-N, G).
+N, G). The snapshot at t (``tgsis.db.gmaps.gmap_at``) is timed the same two
+ways: on chunks it decodes the period's chunk arrays in the client (plan O,
+E), a role granted the faces only reads them. ``--points chunks`` switches
+the positions (``tgsis.gmap_vertex``) to chunks with the darts (their bytes
+are not counted; the default leaves them rows, as the figures before plan O).
 
-    python bench/gmap_chunks.py [--cubes 13 --repeat 3]    # TGSIS_PG=system|embedded
+    python bench/gmap_chunks.py [--cubes 13 --repeat 3 --points rows|chunks]    # TGSIS_PG=system|embedded
 """
 
 from __future__ import annotations
@@ -73,6 +77,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--cubes", type=int, default=13)
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--points", choices=("rows", "chunks"), default="rows")
     args = parser.parse_args()
 
     vt, tt = block_tetrahedra(args.cubes)
@@ -92,7 +97,7 @@ def main() -> None:
         for storage in ("rows", "chunks"):
             if storage == "chunks":
                 empty()
-                for t in TABLES:
+                for t in (*TABLES, *(("gmap_vertex",) if args.points == "chunks" else ())):
                     conn.execute("SELECT tgsis.store_in_chunks(%s)", (t,))
                 conn.commit()
             geoids: list[int] = []
@@ -124,24 +129,37 @@ def main() -> None:
                 conn.commit()
                 assert problems == [], problems
 
+            snapshot: list[Any] = []
+
+            def at() -> None:
+                snapshot[:] = [G.gmap_at(conn, geoid, 0.0)]
+                conn.commit()
+
             t_fetch = timed(fetch, args.repeat)
             back = fetched[0].at(0.0)
             assert back is not None and back.same_as(solid), f"the G-map fetched from {storage} differs"
+            t_at = timed(at, args.repeat)
+            assert snapshot[0] is not None and snapshot[0].same_as(solid), f"gmap_at on {storage} differs"
             t_check = timed(check, args.repeat)
             results[storage] = {
                 "store": t_store,
                 "fetch": t_fetch,
+                "at": t_at,
                 "check": t_check,
                 **{f"bytes_{t}": float(size[t]) for t in TABLES},
             }
             if storage == "chunks":  # the check through the faces (before plan N, G), as a role granted them only
                 conn.execute("CREATE ROLE bench_faces_only IN ROLE tgsis_reader")
-                for name in storage_names(conn).values():
+                # (the points' chunk table too when they are in chunks: the role reads their face)
+                points = "SELECT tgsis.storage_table('tgsis', 'gmap_vertex')" if args.points == "chunks" else None
+                extra = [str(r[0]) for r in conn.execute(points).fetchall()] if points else []
+                for name in [*storage_names(conn).values(), *extra]:
                     revoke = sql.SQL("REVOKE SELECT ON {} FROM tgsis_reader").format(sql.SQL(name))  # type: ignore[arg-type]
                     conn.execute(revoke)
                 conn.execute("SET ROLE bench_faces_only")
                 conn.commit()
                 results[storage]["check_faces"] = timed(check, args.repeat)
+                results[storage]["at_faces"] = timed(at, args.repeat)
                 conn.execute("RESET ROLE")
                 conn.commit()
             if storage == "chunks":  # the server's set-based path (the client's upload declining), for the ratio
@@ -178,6 +196,10 @@ def main() -> None:
     print(f"fetch_chunks_vs_rows: {chunks['fetch'] / rows['fetch']:.2f}")
     print(f"gmap_check_chunks_vs_rows: {chunks['check'] / rows['check']:.2f}")
     print(f"gmap_check_chunks_through_faces_vs_rows: {chunks['check_faces'] / rows['check']:.2f}")
+    print(f"points: {args.points}")
+    print(f"gmap_at_rows_s: {rows['at']:.3f}")
+    print(f"gmap_at_chunks_vs_rows: {chunks['at'] / rows['at']:.2f}")
+    print(f"gmap_at_chunks_through_faces_vs_rows: {chunks['at_faces'] / rows['at']:.2f}")
     assert np.isfinite(both["chunks"])
 
 

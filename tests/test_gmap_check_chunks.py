@@ -186,3 +186,58 @@ def test_the_darts_numbering_from_the_chunk_rows_is_the_faces(conn: Conn, delete
     conn.execute(sql.SQL("PREPARE numbering (bigint, integer[]) AS {}").format(sql.SQL(row[0])))
     assert conn.execute(sql.SQL("EXECUTE numbering ({}, NULL)").format(sql.Literal(g4))).fetchone() == face
     assert face is not None and face[3] is (len(deleted) < 272)  # the second period's darts are 1152..1295
+
+
+def test_gmap_check_reads_the_darts_periods_and_nodes_from_the_chunk_arrays(db_dsn: str, conn: Conn) -> None:
+    """gmap_check's own test (the darts' nodes and periods exist) reads the chunk arrays, not the darts' face:
+    a role that may read the chunk tables but not that face checks a valid map of two periods."""
+    from tests.roles import login_roles
+
+    g4, _ = _store(conn)
+    _switch(conn, "chunks")
+    with login_roles(db_dsn, {"reader": "tgsis_reader"}) as roles:
+        reader = roles.connect("reader")
+        assert reader.execute("SELECT * FROM tgsis.gmap_check(%s)", (g4,)).fetchall() == []
+        conn.execute("REVOKE SELECT ON tgsis.gmap_dart, tgsis.gmap_alpha FROM tgsis_reader")
+        conn.commit()
+        reader.commit()
+        assert reader.execute("SELECT has_table_privilege('tgsis.gmap_dart', 'SELECT')").fetchone() == (False,)
+        assert _chunk_path(reader, MODEL4)
+        assert reader.execute("SELECT * FROM tgsis.gmap_check(%s)", (g4,)).fetchall() == []
+
+
+# dart breaks that only gmap_check's own test names (a dart's node or period missing), each made through the faces
+OWN_BREAKS = {
+    "a node gone": "DELETE FROM tgsis.gmap_node WHERE geoid = %(g)s AND nodeid = (SELECT nodeid FROM tgsis.gmap_dart "
+    "WHERE geoid = %(g)s AND dartid = 1200)",
+    "a dart's node beyond the period's": "UPDATE tgsis.gmap_dart SET nodeid = nodeid + 100000 WHERE geoid = %(g)s "
+    "AND dartid IN (3, 1290)",
+    "a period gone": "DELETE FROM tgsis.gmap_timem WHERE geoid = %(g)s AND timem = (SELECT max(timem) "
+    "FROM tgsis.gmap_timem WHERE geoid = %(g)s)",
+}
+
+
+@pytest.mark.parametrize("versioned", [False, True])
+@pytest.mark.parametrize("breakage", list(OWN_BREAKS))
+def test_gmap_checks_own_breaks_are_named_on_chunks_as_on_rows(conn: Conn, breakage: str, versioned: bool) -> None:
+    """Each break, made in the session (or in a version only), gives the same gmap_check on chunks as on rows."""
+    g4, _ = _store(conn)
+    if versioned:
+        tgsis.enable_feature_versioning(conn)
+        tgsis.create_version(conn, "edit")
+        conn.commit()
+
+    def broken() -> list[tuple[Any, ...]]:
+        with tgsis.in_version(conn, "edit" if versioned else "DEFAULT"):
+            conn.execute("SAVEPOINT broken")
+            conn.execute(OWN_BREAKS[breakage], {"g": g4})
+            found = conn.execute("SELECT * FROM tgsis.gmap_check(%s)", (g4,)).fetchall()
+            conn.execute("ROLLBACK TO SAVEPOINT broken")
+        conn.rollback()
+        return found
+
+    as_rows = broken()
+    assert as_rows, "the break went unnoticed"
+    _switch(conn, "chunks")
+    assert broken() == as_rows
+    assert conn.execute("SELECT * FROM tgsis.gmap_check(%s)", (g4,)).fetchall() == []

@@ -222,8 +222,9 @@ FEATURE = {
 MARKERS = ("geoname", "m.axes")
 # but the check-out's look-up of the feature before its read (in a transaction of its own)
 SKIP = {"checkout": 1}
-# gmap_at reads no name: after its COPY of the positions at the instant before t (then those after t)
-MARKERS_OF = {"gmap_at": ("FROM tgsis.gmap_vertex",)}
+# gmap_at reads no name: after its COPY of the positions at the instant before t (then those after t); with the
+# darts in chunks (read by the client codec, the points of both instants in one statement) after the darts' COPY
+MARKERS_OF = {"gmap_at": ("FROM tgsis.gmap_vertex", '"gmap_dart_chunk"')}
 
 
 def _change(other: Conn, reader: str, ids: Ids) -> Callable[[], None]:

@@ -5,6 +5,14 @@
 -- partition D0..Dk, checked by tgsis.gmap_conditions), darts of nodes and
 -- periods that exist. darts lists the first offending darts (at most 20),
 -- count all of them.
+-- Darts stored in chunks (docs/storage.md, "G-maps"): the periods and node
+-- ranges of the darts are read from the chunk arrays the caller sees (one
+-- row per chunk version, its timem and nodeid arrays unnested together, a
+-- node its vbase plus the relative ref or its _wide value), not from the
+-- face, which decodes every column of every slot. Read as the caller, when
+-- tgsis.gmap_chunk_arrays_sql gives the chunk statement (its checks: both
+-- tables in chunks, the chunk tables readable; its viewing set), with the
+-- faces' visibility test and snapshot guard; else through the face.
 CREATE FUNCTION tgsis.gmap_check(p_geoid bigint)
 RETURNS TABLE (problem text, count bigint, darts bigint[])
 LANGUAGE plpgsql
@@ -18,6 +26,10 @@ DECLARE
     v_lo    bigint;
     v_hi    bigint;
     v_dense boolean;
+    v_chunks record;
+    v_times double precision[];
+    v_los   bigint[];
+    v_his   bigint[];
 BEGIN
     SELECT g.dimension INTO v_n FROM tgsis.gmap g WHERE g.geoid = p_geoid;
     IF NOT FOUND THEN
@@ -31,8 +43,25 @@ BEGIN
     -- that holds the darts' nodes, as tgsis.insert_gmap numbers them: an
     -- aggregate over the darts (grouped by period only when they lie in
     -- several) and one over the nodes.
-    SELECT min(g.timem), max(g.timem), min(g.nodeid), max(g.nodeid) INTO v_first, v_last, v_lo, v_hi
-      FROM tgsis.gmap_dart g WHERE g.geoid = p_geoid;
+    SELECT * INTO v_chunks FROM tgsis.gmap_chunk_arrays_sql('tgsis.gmap_dart', 'tgsis.gmap_alpha', 'nodeid', 'timem');
+    IF v_chunks.arrays IS NOT NULL THEN
+        -- each period's node range from the chunk arrays (a hole: a NULL timem, skipped), periods ascending
+        EXECUTE 'SELECT array_agg(d.t ORDER BY d.t), array_agg(d.lo ORDER BY d.t), array_agg(d.hi ORDER BY d.t)
+                   FROM (SELECT u.t, min(coalesce(c.vbase + u.r, u.w)) AS lo, max(coalesce(c.vbase + u.r, u.w)) AS hi
+                           FROM tgsis.gmap_dart_chunk c
+                          CROSS JOIN LATERAL unnest(c.timem, c.nodeid, c.nodeid_wide) AS u (t, r, w)
+                          WHERE (SELECT tgsis.chunk_snapshot_guard(''tgsis.gmap_dart_chunk''::regclass)) AND c.geoid = $1
+                            AND ($2 IS NULL OR ((c.revision = ANY ($2)) IS TRUE AND (NOT c.revclosed OR NOT (c.lastrevs && $2))))
+                            AND u.t IS NOT NULL
+                          GROUP BY u.t) AS d'
+           INTO v_times, v_los, v_his USING p_geoid, v_chunks.dartset;
+        v_first := v_times[1];
+        v_last := v_times[cardinality(v_times)];
+        SELECT min(x), max(y) INTO v_lo, v_hi FROM unnest(v_los, v_his) AS u (x, y);
+    ELSE
+        SELECT min(g.timem), max(g.timem), min(g.nodeid), max(g.nodeid) INTO v_first, v_last, v_lo, v_hi
+          FROM tgsis.gmap_dart g WHERE g.geoid = p_geoid;
+    END IF;
     IF v_first IS NULL THEN
         RETURN;   -- no darts
     END IF;
@@ -41,9 +70,13 @@ BEGIN
                       FROM tgsis.gmap_node g WHERE g.geoid = p_geoid AND g.timem = v_first)
                    AND EXISTS (SELECT FROM tgsis.gmap_timem m WHERE m.geoid = p_geoid AND m.timem = v_first);
     ELSE
+        IF v_times IS NULL THEN
+            SELECT array_agg(g.timem), array_agg(g.lo), array_agg(g.hi) INTO v_times, v_los, v_his
+              FROM (SELECT g.timem, min(g.nodeid) AS lo, max(g.nodeid) AS hi
+                      FROM tgsis.gmap_dart g WHERE g.geoid = p_geoid GROUP BY g.timem) AS g;
+        END IF;
         v_dense := (SELECT bool_and(coalesce(m.timem IS NOT NULL AND n.nodes = n.hi - n.lo + 1 AND d.lo >= n.lo AND d.hi <= n.hi, false))
-                      FROM (SELECT g.timem, min(g.nodeid) AS lo, max(g.nodeid) AS hi
-                              FROM tgsis.gmap_dart g WHERE g.geoid = p_geoid GROUP BY g.timem) AS d
+                      FROM unnest(v_times, v_los, v_his) AS d (timem, lo, hi)
                       LEFT JOIN (SELECT g.timem, count(*) AS nodes, min(g.nodeid) AS lo, max(g.nodeid) AS hi
                                    FROM tgsis.gmap_node g WHERE g.geoid = p_geoid GROUP BY g.timem) AS n ON n.timem = d.timem
                       LEFT JOIN tgsis.gmap_timem m ON m.geoid = p_geoid AND m.timem = d.timem);
@@ -72,4 +105,4 @@ END
 $$;
 
 COMMENT ON FUNCTION tgsis.gmap_check(bigint) IS
-    'problems of a stored G-map (model 4) with the first offending darts: missing or dangling alpha rows, (i) non-involutions, (ii) fixed points below alpha_n, (iii) alpha_i o alpha_j not involutions (i + 2 <= j), darts sent into another topology period, 0-cells with several nodes, darts of missing nodes or periods; no rows: valid';
+    'problems of a stored G-map (model 4) with the first offending darts: missing or dangling alpha rows, (i) non-involutions, (ii) fixed points below alpha_n, (iii) alpha_i o alpha_j not involutions (i + 2 <= j), darts sent into another topology period, 0-cells with several nodes, darts of missing nodes or periods; no rows: valid (the darts'' periods and nodes read from their chunk arrays when stored in chunks the caller may read)';

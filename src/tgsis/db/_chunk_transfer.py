@@ -55,6 +55,7 @@ __all__ = [
     "upload_chunks",
     "download_chunks",
     "download_tables",
+    "object_rows",
     "chunk_copy_query",
     "visible_chunks",
     "split_copy",
@@ -342,22 +343,32 @@ def visible_chunks(layout: ChunkTable, revisions: Sequence[int] | None = None) -
     ).format(guard)
 
 
-def chunk_copy_query(layout: ChunkTable, geoids: Sequence[int], revisions: Sequence[int] | None = None) -> sql.Composed:
+def chunk_copy_query(
+    layout: ChunkTable,
+    geoids: Sequence[int],
+    revisions: Sequence[int] | None = None,
+    *,
+    where: sql.Composable | None = None,
+) -> sql.Composed:
     """The COPY of the visible chunk versions of ``geoids``: their columns for :func:`~tgsis._chunks.from_copy`.
 
     For one object the stream is :func:`from_copy`'s as it is; for several, each row starts with
     ``geoid`` (rows in no order), which :func:`split_copy` takes off. ``revisions``: the set of
-    :func:`visible_chunks` (default: the session's).
+    :func:`visible_chunks` (default: the session's). ``where``: an SQL condition on the chunk ``c`` choosing
+    the chunks read (e.g. those holding a G-map period's darts, :func:`object_rows`); None: every chunk.
     """
     columns = sql.SQL(", ").join(sql.SQL("c.{}").format(sql.Identifier(c)) for c in layout.columns.select_columns())
     key = sql.Identifier(layout.columns.key)
+    visible = visible_chunks(layout, revisions)
+    if where is not None:
+        visible = sql.SQL("({}) AND {}").format(where, visible)
     if len(geoids) == 1:
         select = sql.SQL("SELECT {} FROM {} c WHERE c.{} = {} AND {}").format(
-            columns, layout.relation, key, sql.Literal(int(geoids[0])), visible_chunks(layout, revisions)
+            columns, layout.relation, key, sql.Literal(int(geoids[0])), visible
         )
     else:
         select = sql.SQL("SELECT c.{}, {} FROM {} c WHERE c.{} = ANY ({}::bigint[]) AND {}").format(
-            key, columns, layout.relation, key, sql.Literal([int(g) for g in geoids]), visible_chunks(layout, revisions)
+            key, columns, layout.relation, key, sql.Literal([int(g) for g in geoids]), visible
         )
     return sql.SQL("COPY ({}) TO STDOUT (FORMAT binary)").format(select)
 
@@ -466,6 +477,37 @@ def _rows(geoid: int, chunks: ChunkSet | None, spec: ChunkColumns) -> ObjectRows
     ids, columns = chunks.rows()
     holes = np.empty(0, dtype=np.int64) if chunks.present.all() else chunks.ids()[~chunks.present]
     return ObjectRows(geoid, ids, columns, holes, chunks.null_rows())
+
+
+def object_rows(conn: Conn, layout: ChunkTable, geoid: int, where: sql.Composable | None = None) -> ObjectRows:
+    """One object's rows of a chunk table keyed ``geoid, chunk`` from the chunk versions the session sees, decoded here.
+
+    One binary COPY (:func:`chunk_copy_query`) with the role's rights, as :func:`download_chunks` reads.
+
+    Parameters
+    ----------
+    layout : ChunkTable
+        :func:`chunk_table` of a table without instant keys (``vrtx``, ``gmap_dart``, ``md_vertex``, ...).
+    geoid : int
+    where : sql.Composable, optional
+        An SQL condition on the chunk ``c`` choosing the chunks read (the rows of the others are not in the
+        answer); None: every chunk.
+
+    Returns
+    -------
+    ObjectRows
+        Ids ascending (n,), each column (n,) or (n, m) for points, the holes; nothing when no chunk is read.
+
+    Raises
+    ------
+    InvalidInputError
+        A layout with instant keys, or chunks that break the contract (the codec refuses them).
+    """
+    if layout.columns.instant:
+        raise InvalidInputError(
+            f"tgsis.{layout.table}_chunk is keyed by {list(layout.columns.instant)} too: read it by instant_rows"
+        )
+    return _objects(layout, [geoid], _copy_out(conn, chunk_copy_query(layout, [geoid], where=where)))[int(geoid)]
 
 
 def download_chunks(conn: Conn, table: str, geoids: Sequence[int]) -> dict[int, ObjectRows]:

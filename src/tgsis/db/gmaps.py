@@ -29,9 +29,18 @@ import numpy.typing as npt
 from psycopg import sql
 
 from tgsis import datamodels
+from tgsis._chunks import CHUNK_SIZE
 from tgsis._series import check_time
 from tgsis.arguments import checked, no_nul
-from tgsis.db._chunk_transfer import point_rows, upload_rows
+from tgsis.db._chunk_transfer import (
+    ChunkTable,
+    chunk_table,
+    chunked_tables,
+    instant_rows,
+    object_rows,
+    point_rows,
+    upload_rows,
+)
 from tgsis.db._continuity import check_continuity, checked_tolerance
 from tgsis.db._gmap_common import (
     Conn,
@@ -456,6 +465,83 @@ def _mix(a: npt.NDArray[np.float64], b: npt.NDArray[np.float64], w: float, same:
     return a if same else a + w * (b - a)
 
 
+def _readable_chunks(conn: Conn, table: str, chunked: frozenset[str], *, instants: bool = False) -> ChunkTable | None:
+    """The chunk table of a model-4 table when its rows are read from it: stored in chunks and the role may read it."""
+    if table not in chunked:
+        return None
+    layout = chunk_table(conn, table, instants=instants, values=not instants)
+    return layout if layout.readable else None
+
+
+def _period_darts(
+    conn: Conn, feature_id: int, timem: float, chunked: frozenset[str]
+) -> list[npt.NDArray[np.int64]] | None:
+    """A period's darts from their chunks (``dartid, nodeid, acellid`` with -1 for NULL, by dartid), or None: the face.
+
+    Only the chunks holding a dart of the period are sent (``timem = ANY (c.timem)``), decoded here.
+    """
+    layout = _readable_chunks(conn, "gmap_dart", chunked)
+    if layout is None:
+        return None
+    rows = object_rows(conn, layout, feature_id, sql.SQL("{} = ANY (c.timem)").format(sql.Literal(timem)))
+    here = rows.columns["timem"] == timem  # (float8's =: -0.0 is 0.0, as the face's WHERE)
+    nulls = rows.nulls.get("acellid")
+    acellid = rows.columns["acellid"].astype(np.int64)
+    if nulls is not None:
+        acellid = np.where(nulls, -1, acellid)
+    return [rows.ids[here], rows.columns["nodeid"].astype(np.int64)[here], acellid[here]]
+
+
+def _period_alpha(
+    conn: Conn, feature_id: int, n: int, low: int, high: int, chunked: frozenset[str]
+) -> list[npt.NDArray[Any]] | None:
+    """The involutions of darts low..high from their chunks (``level, dartid, dartid2``, level-major), or None: the face."""
+    layout = _readable_chunks(conn, "gmap_alpha", chunked)
+    if layout is None:
+        return None
+    span = sql.SQL("c.chunk BETWEEN {} AND {}").format(sql.Literal(low // CHUNK_SIZE), sql.Literal(high // CHUNK_SIZE))
+    levels = instant_rows(conn, layout, [feature_id], span) if high >= low else {}
+    parts: list[list[npt.NDArray[Any]]] = [[], [], []]
+    for level in range(n + 1):
+        rows = levels.get((feature_id, float(level)))
+        if rows is None:
+            continue
+        inside = (rows.ids >= low) & (rows.ids <= high)
+        parts[0].append(np.full(int(inside.sum()), level, dtype=np.int16))
+        parts[1].append(rows.ids[inside])
+        parts[2].append(rows.columns["dartid2"].astype(np.int64)[inside])
+    kinds = (np.int16, np.int64, np.int64)
+    return [np.concatenate([np.empty(0, dtype=k), *p]) for k, p in zip(kinds, parts, strict=True)]
+
+
+def _period_points(
+    conn: Conn, feature_id: int, m: int, timem: float, instants: tuple[float, float], chunked: frozenset[str]
+) -> list[list[npt.NDArray[Any]]] | None:
+    """The period's points at its two bracketing instants from their chunks (``nodeid``, (k, m) coordinates), or None."""
+    layout = _readable_chunks(conn, "gmap_vertex", chunked, instants=True)
+    if layout is None or not layout.columns.points:
+        return None
+    point = layout.columns.points[0]
+    where = sql.SQL("c.timem = {} AND c.timet IN ({}, {})").format(
+        sql.Literal(timem), sql.Literal(instants[0]), sql.Literal(instants[1])
+    )
+    found = instant_rows(conn, layout, [feature_id], where)
+    ends = []
+    for at in instants:
+        rows = next((o for key, o in found.items() if key[1] == timem and key[2] == at), None)
+        if rows is None:
+            ends.append([np.empty(0, dtype=np.int64), np.empty((0, m))])
+            continue
+        coordinates = rows.columns[point]
+        if len(rows.ids) and coordinates.shape[1] != m:  # (as the face's read refuses a value of another size)
+            raise InvalidGMapError(
+                f"G-map {feature_id}: its points at {at!r} have {coordinates.shape[1]} coordinates, not its embedding's {m}",
+                hint=f"SELECT * FROM tgsis.check_geometry({feature_id})",
+            )
+        ends.append([rows.ids, coordinates.reshape(-1, m)])
+    return ends
+
+
 @checked
 def gmap_at(conn: Conn, feature_id: int, t: float) -> GMap | None:
     """The G-map of a feature at model time ``t``: the period and weight from SQL (``tgsis.gmap_frame``), its rows by COPY.
@@ -484,39 +570,48 @@ def gmap_at(conn: Conn, feature_id: int, t: float) -> GMap | None:
         n, m = int(n_row[0]), int(n_row[1])
         timem, t0, t1, w = (float(v) for v in frame)
         key = [sql.Literal(feature_id), sql.Literal(timem)]
-        dart = copy_out(
-            conn,
-            sql.SQL(
-                "SELECT dartid, nodeid, coalesce(acellid, -1) FROM tgsis.gmap_dart "
-                "WHERE geoid = {} AND timem = {} ORDER BY dartid"
-            ).format(*key),
-            ["int8", "int8", "int8"],
-        )
+        # a table in chunks that the role may read: its chunks decoded here (the client codec, as fetch_feature
+        # reads model 1), not the face's rows decoded by the server; else the face
+        chunked = chunked_tables(conn)
+        dart = _period_darts(conn, feature_id, timem, chunked)
+        if dart is None:
+            dart = copy_out(
+                conn,
+                sql.SQL(
+                    "SELECT dartid, nodeid, coalesce(acellid, -1) FROM tgsis.gmap_dart "
+                    "WHERE geoid = {} AND timem = {} ORDER BY dartid"
+                ).format(*key),
+                ["int8", "int8", "int8"],
+            )
         # the involutions of the period's darts: one range of the key (geoid, dartid, level), whatever the planner's
         # statistics say (a join planned on freshly loaded tables ran for minutes), then only the period's darts
         low, high = (int(dart[0].min()), int(dart[0].max())) if len(dart[0]) else (0, -1)
         span = [sql.Literal(low), sql.Literal(high)]
-        alpha = copy_out(
-            conn,
-            sql.SQL(
-                "SELECT a.level, a.dartid, a.dartid2 FROM tgsis.gmap_alpha a WHERE a.geoid = {} "
-                "AND a.dartid BETWEEN {} AND {} ORDER BY a.dartid, a.level"
-            ).format(key[0], *span),
-            ["int2", "int8", "int8"],
-        )
-        keep = np.isin(alpha[1], dart[0])
-        alpha = [column[keep] for column in alpha]
-        ends = [
-            copy_out(
+        alpha = _period_alpha(conn, feature_id, n, low, high, chunked)
+        if alpha is None:
+            alpha = copy_out(
                 conn,
                 sql.SQL(
-                    "SELECT nodeid, coordinate FROM tgsis.gmap_vertex WHERE geoid = {} AND timem = {} "
-                    "AND timet = {} ORDER BY nodeid"
-                ).format(*key, sql.Literal(at)),
-                ["int8", f"float8[{m}]"],
+                    "SELECT a.level, a.dartid, a.dartid2 FROM tgsis.gmap_alpha a WHERE a.geoid = {} "
+                    "AND a.dartid BETWEEN {} AND {} ORDER BY a.dartid, a.level"
+                ).format(key[0], *span),
+                ["int2", "int8", "int8"],
             )
-            for at in (t0, t1)
-        ]
+        keep = np.isin(alpha[1], dart[0])
+        alpha = [column[keep] for column in alpha]
+        ends = _period_points(conn, feature_id, m, timem, (t0, t1), chunked)
+        if ends is None:
+            ends = [
+                copy_out(
+                    conn,
+                    sql.SQL(
+                        "SELECT nodeid, coordinate FROM tgsis.gmap_vertex WHERE geoid = {} AND timem = {} "
+                        "AND timet = {} ORDER BY nodeid"
+                    ).format(*key, sql.Literal(at)),
+                    ["int8", f"float8[{m}]"],
+                )
+                for at in (t0, t1)
+            ]
         props = [p for p in fc.cell_properties if p.size == 1 and p.type != "boolean"]
         values = (
             [
