@@ -212,12 +212,13 @@ $body$, v_rowfn, v_rows, v_dels, v_seq, v_flag,
                 USING ERRCODE = 'TG201', DETAIL = 'The switch of tgsis.d4dvrtx into chunks makes the view tgsis.d4dvrtx_arrays.',
                       HINT = 'rename or drop that relation, then store the table in chunks again';
         END IF;
-        -- the caller's right on the face, asked when read (by name: the face takes tgsis.d4dvrtx at the switch's end,
+        -- the caller's right on the face, asked when read (by name: the face takes the table's name at the switch's end,
         -- and a name in a text makes no dependency): a GRANT or REVOKE on the face reaches the arrays
         EXECUTE format('CREATE VIEW tgsis.d4dvrtx_arrays WITH (security_barrier = true) AS '
                        'SELECT v.geoid, v.timem, v.timet, v.chunk, v.chunk << %s AS base, v.x, v.y, v.z FROM %s v WHERE %s',
                        (SELECT round(log(2, r.chunksize))::integer FROM tgsis.chunk_registry(p_table) r), v_chunk,
-                       array_to_string(v_chunkwhere || '(SELECT coalesce(has_table_privilege(to_regclass(''tgsis.d4dvrtx''), ''SELECT''), false))'::text,
+                       array_to_string(v_chunkwhere || format('(SELECT coalesce(has_table_privilege(to_regclass(%L), ''SELECT''), false))',
+                                                              format('%I.%I', v_reg.schemaname, v_reg.tablename)),
                                        ' AND '));
         v_arrays := 'tgsis.d4dvrtx_arrays'::regclass;
         EXECUTE format('COMMENT ON VIEW %s IS %L', v_arrays,
