@@ -184,6 +184,7 @@ _NAMED_IN_DOCS = frozenset(
         "vertex",
         "vertices",
         "vertices_at",
+        "visible_versions",
         "write_object_rows",
         "write_revision",
     }

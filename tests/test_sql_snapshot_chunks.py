@@ -153,10 +153,64 @@ def test_a_reader_without_the_arrays_reads_the_face(db_dsn: str, conn: Conn) -> 
         reader = roles.connect("reader")
         assert _arrays_read(reader, geoid, 0.5)
         assert _answers(reader, geoid) == expected
-        conn.execute("REVOKE SELECT ON tgsis.d4dvrtx_arrays FROM tgsis_reader")
+        conn.execute("REVOKE SELECT ON tgsis.d4dvrtx_arrays FROM PUBLIC")
         conn.commit()
         assert not _arrays_read(reader, geoid, 0.5)  # the face's join instead, not 42501
         assert _answers(reader, geoid) == expected
+
+
+def _refused(reader: Conn, geoid: int) -> None:
+    """The face's answer to a role that may not read it, between two instants as at one (42501)."""
+    for t in (0.5, 1.0):
+        with pytest.raises(psycopg.errors.InsufficientPrivilege):
+            reader.execute("SELECT * FROM tgsis.vertices_at(%s, %s)", (geoid, t))
+        reader.rollback()
+
+
+@pytest.mark.parametrize("when", ["before", "after"])
+def test_a_grant_on_the_face_after_the_switch_reaches_the_arrays(db_dsn: str, conn: Conn, when: str) -> None:
+    """The arrays answer a caller who may read the face, asked at each read (before: the face's grants were
+    copied to the arrays once, at the switch: a role granted the face later read the face's join only). The
+    face revoked from the readers before the switch or after it, then granted to one reader."""
+    from tests.roles import login_roles
+
+    tgsis.create_feature_class(conn, "evolving", "SURFACE", time_model="EVOLVING")
+    conn.commit()
+    geoid = _insert(conn)
+    with login_roles(db_dsn, {"reader": "tgsis_reader"}) as roles:
+        reader = roles.connect("reader")
+        if when == "before":
+            conn.execute("REVOKE SELECT ON tgsis.d4dvrtx FROM tgsis_reader")
+            conn.commit()
+        _switch(conn, "chunks")
+        expected = _answers(conn, geoid)
+        if when == "after":
+            conn.execute("REVOKE SELECT ON tgsis.d4dvrtx FROM tgsis_reader")
+            conn.commit()
+        _refused(reader, geoid)
+        conn.execute(f"GRANT SELECT ON tgsis.d4dvrtx TO {roles.name('reader')}")
+        conn.commit()
+        assert _arrays_read(reader, geoid, 0.5)
+        assert _answers(reader, geoid) == expected
+
+
+def test_a_revoke_on_the_face_after_the_switch_reaches_the_arrays(db_dsn: str, conn: Conn) -> None:
+    """A role revoked from the face after the switch reads no node through the arrays (before: it still read
+    them there, the arrays' grant copied at the switch, where the face refuses with 42501)."""
+    from tests.roles import login_roles
+
+    tgsis.create_feature_class(conn, "evolving", "SURFACE", time_model="EVOLVING")
+    conn.commit()
+    geoid = _insert(conn)
+    _switch(conn, "chunks")
+    with login_roles(db_dsn, {"reader": "tgsis_reader"}) as roles:
+        reader = roles.connect("reader")
+        assert _arrays_read(reader, geoid, 0.5)
+        conn.execute("REVOKE SELECT ON tgsis.d4dvrtx FROM tgsis_reader")
+        conn.commit()
+        assert reader.execute("SELECT count(*) FROM tgsis.d4dvrtx_arrays").fetchone() == (0,)
+        reader.rollback()
+        _refused(reader, geoid)
 
 
 def test_partitioning_model_3_keeps_the_arrays(conn: Conn) -> None:

@@ -61,8 +61,8 @@ BEGIN
         EXECUTE format('SELECT count(*) || '':'' || coalesce(bit_xor((''x'' || left(md5(int8send(r.chunk) || %s), 16))::bit(64)::bigint), 0)
                           FROM %I.%I r
                          WHERE r.%I = ANY ($1)
-                           AND ($2 IS NULL OR ((r.revision = ANY ($2)) IS TRUE AND (NOT r.revclosed OR NOT (r.lastrevs && $2))))',
-                       v_hash, p_schema, p_table || '_chunk', p_keyfield)
+                           AND ($2 IS NULL OR (%s))',
+                       v_hash, p_schema, p_table || '_chunk', p_keyfield, tgsis.visible_versions('r', '$2'))
            INTO v_result
           USING p_keys, CASE WHEN EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = p_schema AND t.tablename = p_table)
                              THEN tgsis.get_revisions() END;
@@ -92,9 +92,8 @@ BEGIN
     -- the scan from running in parallel (measured: twice as slow)
     IF EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = p_schema AND t.tablename = p_table) THEN
         EXECUTE format('SELECT count(*) || '':'' || coalesce(bit_xor(%s), 0) FROM %I.%I r
-                         WHERE r.%I = ANY ($1) AND (r.revision = ANY ($2)) IS TRUE
-                           AND (NOT r.revclosed OR NOT (r.lastrevs && $2))',
-                       v_hash, p_schema, p_table || '_ver', p_keyfield)
+                         WHERE r.%I = ANY ($1) AND %s',
+                       v_hash, p_schema, p_table || '_ver', p_keyfield, tgsis.visible_versions('r', '$2'))
            INTO v_result USING p_keys, tgsis.get_revisions();
     ELSE
         EXECUTE format('SELECT count(*) || '':'' || coalesce(bit_xor(%s), 0) FROM %I.%I r WHERE r.%I = ANY ($1)',

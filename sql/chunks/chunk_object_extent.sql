@@ -24,7 +24,7 @@ DECLARE
     v_ref  text;
     v_vset integer[];
     v_cset integer[];
-    v_vis  text := '($2 IS NULL OR ((c.revision = ANY ($2)) IS TRUE AND (NOT c.revclosed OR NOT (c.lastrevs && $2))))';
+    v_vis  text := '($2 IS NULL OR (' || tgsis.visible_versions('c', '$2') || '))';
 BEGIN
     SELECT m.chunkrefs[1] INTO v_ref FROM tgsis.model_tables m WHERE m.tablename = p_cell_table;
     IF v_ref IS NULL OR NOT EXISTS (SELECT FROM tgsis.model_tables m WHERE m.tablename = p_vertex_table)

@@ -253,9 +253,9 @@ BEGIN
     -- the visible keys among those to delete, what a DELETE would count (the others are skipped)
     IF v_nd > 0 THEN
         EXECUTE format('SELECT count(*) FROM %s r WHERE r._delete AND EXISTS (SELECT FROM %s f WHERE %s'
-                       ' AND (NOT $1 OR ((f.revision = ANY ((SELECT tgsis.get_revisions(true))::integer[])) IS TRUE'
-                       ' AND (NOT f.revclosed OR NOT (f.lastrevs && (SELECT tgsis.get_revisions(true)))))))',
-                       v_tab, tgsis.storage_row_versions('tgsis', p_table, v_ids), v_match)
+                       ' AND (NOT $1 OR (%s)))',
+                       v_tab, tgsis.storage_row_versions('tgsis', p_table, v_ids), v_match,
+                       tgsis.visible_versions('f', '(SELECT tgsis.get_revisions(true))::integer[]'))
            INTO rows_deleted USING v_versioned;
         IF rows_deleted = 0 THEN  -- none visible: none written (as a DELETE of none)
             EXECUTE format('DELETE FROM %s r WHERE r._delete', v_tab);
@@ -264,11 +264,11 @@ BEGIN
     -- a row whose key is visible and not deleted here: the rows' primary key would refuse it, the face refuses it
     IF v_ni > 0 THEN
         EXECUTE format('SELECT concat_ws(%L, %s) FROM %s r WHERE NOT r._delete AND EXISTS (SELECT FROM %s f WHERE %s'
-                       ' AND (NOT $1 OR ((f.revision = ANY ((SELECT tgsis.get_revisions(true))::integer[])) IS TRUE'
-                       ' AND (NOT f.revclosed OR NOT (f.lastrevs && (SELECT tgsis.get_revisions(true)))))))'
+                       ' AND (NOT $1 OR (%s)))'
                        ' AND NOT EXISTS (SELECT FROM %s f WHERE f._delete AND %s) LIMIT 1',
                        ', ', (SELECT string_agg(format('r.%I', k), ', ') FROM unnest(v_key) AS k), v_tab,
-                       tgsis.storage_row_versions('tgsis', p_table, v_ids), v_match, v_tab, v_match)
+                       tgsis.storage_row_versions('tgsis', p_table, v_ids), v_match,
+                       tgsis.visible_versions('f', '(SELECT tgsis.get_revisions(true))::integer[]'), v_tab, v_match)
            INTO v_dup USING v_versioned;
         IF v_dup IS NOT NULL THEN
             RAISE EXCEPTION 'duplicate key value violates unique constraint "%"', p_table || '_pkey'

@@ -91,9 +91,8 @@ BEGIN
     v_where := v_where || format('(SELECT tgsis.chunk_snapshot_guard(%L::regclass))', v_chunk::text);
     v_where := v_where || format('CASE WHEN (SELECT EXISTS (SELECT FROM tgsis.versioned_tables t '
                                  'WHERE t.schemaname = %L AND t.tablename = %L)) '
-                                 'THEN (v.revision = ANY ((SELECT tgsis.get_revisions(true))::integer[])) IS TRUE '
-                                 'AND (NOT v.revclosed OR NOT (v.lastrevs && (SELECT tgsis.get_revisions(true)))) '
-                                 'ELSE true END', v_reg.schemaname, v_reg.tablename);
+                                 'THEN %s ELSE true END', v_reg.schemaname, v_reg.tablename,
+                                 tgsis.visible_versions('v', '(SELECT tgsis.get_revisions(true))::integer[]'));
     v_chunkwhere := v_where;  -- the chunk versions' test without the slot's (the arrays view below)
     v_where := v_where || v_dec.present;
     IF v_geoidcol IS NOT NULL THEN
@@ -204,7 +203,7 @@ $body$, v_rowfn, v_rows, v_dels, v_seq, v_flag,
     -- model 3's node positions (the switch's face, named <table> or <table>_face, not a test's face beside the live
     -- table under another name): tgsis.d4dvrtx_arrays,
     -- one row per visible chunk version with its arrays as stored, the face's guard, visibility and rights filter,
-    -- its SELECT grants and owner; model 3's snapshot (vertices_at, temporal/) interpolates two instants' aligned chunks slot by slot on it
+    -- rows only for a caller who may read the face (asked at each read), SELECT granted to PUBLIC, the face's owner; model 3's snapshot (vertices_at, temporal/) interpolates two instants' aligned chunks slot by slot on it
     -- (evolving_chunk_vertices; docs/storage.md "Snapshots at t"); dropped by tgsis.store_in_rows
     IF coalesce(p_view, v_reg.tablename) IN (v_reg.tablename, v_reg.tablename || '_face') AND v_reg.classname IS NULL
        AND v_reg.tablename = 'd4dvrtx' THEN
@@ -213,22 +212,22 @@ $body$, v_rowfn, v_rows, v_dels, v_seq, v_flag,
                 USING ERRCODE = 'TG201', DETAIL = 'The switch of tgsis.d4dvrtx into chunks makes the view tgsis.d4dvrtx_arrays.',
                       HINT = 'rename or drop that relation, then store the table in chunks again';
         END IF;
+        -- the caller's right on the face, asked when read (by name: the face takes the table's name at the switch's end,
+        -- and a name in a text makes no dependency): a GRANT or REVOKE on the face reaches the arrays
         EXECUTE format('CREATE VIEW tgsis.d4dvrtx_arrays WITH (security_barrier = true) AS '
                        'SELECT v.geoid, v.timem, v.timet, v.chunk, v.chunk << %s AS base, v.x, v.y, v.z FROM %s v WHERE %s',
                        (SELECT round(log(2, r.chunksize))::integer FROM tgsis.chunk_registry(p_table) r), v_chunk,
-                       array_to_string(v_chunkwhere, ' AND '));
+                       array_to_string(v_chunkwhere || format('(SELECT coalesce(has_table_privilege(to_regclass(%L), ''SELECT''), false))',
+                                                              format('%I.%I', v_reg.schemaname, v_reg.tablename)),
+                                       ' AND '));
         v_arrays := 'tgsis.d4dvrtx_arrays'::regclass;
         EXECUTE format('COMMENT ON VIEW %s IS %L', v_arrays,
                        format('model 3''s node positions stored in chunks (%s): one row per visible chunk version (the face''s '
-                              'guard, visibility and class rights filter), base the id of its first slot, x, y, z its arrays '
+                              'guard, visibility and class rights filter; none for a caller who may not read the face), base the id of its first slot, x, y, z its arrays '
                               '(NULL at a hole); read by model 3''s snapshot at t (vertices_at, evolving_chunk_vertices), made by the switch '
                               'into chunks, dropped by the way back', v_chunk));
-        FOR v_acl IN SELECT a.grantee, a.is_grantable FROM pg_class c, aclexplode(c.relacl) AS a
-                      WHERE c.oid = v_face AND a.grantee <> c.relowner AND a.privilege_type = 'SELECT' LOOP
-            EXECUTE format('GRANT SELECT ON %s TO %s%s', v_arrays,
-                           CASE WHEN v_acl.grantee = 0 THEN 'PUBLIC' ELSE quote_ident(pg_get_userbyid(v_acl.grantee)) END,
-                           CASE WHEN v_acl.is_grantable THEN ' WITH GRANT OPTION' ELSE '' END);
-        END LOOP;
+        -- readable by PUBLIC: the rows are those of the face the caller may read (the test above, the class rights filter)
+        EXECUTE format('GRANT SELECT ON %s TO PUBLIC', v_arrays);
         EXECUTE format('ALTER VIEW %s OWNER TO %I', v_arrays,
                        (SELECT pg_get_userbyid(c.relowner) FROM pg_class c WHERE c.oid = v_chunk));
     END IF;

@@ -107,9 +107,9 @@ BEGIN
     -- rights filter) but read by key: only the chunks holding p_ids are decoded (tgsis.storage_row_versions),
     -- where the face decoded the whole object
     v_held := format('SELECT (array_agg(f.%2$I))[1] FROM %1$s f WHERE f.%3$I = $1 AND f.%2$I = ANY ($2)'
-                     ' AND (NOT $3 OR ((f.revision = ANY ((SELECT tgsis.get_revisions(true))::integer[])) IS TRUE'
-                     ' AND (NOT f.revclosed OR NOT (f.lastrevs && (SELECT tgsis.get_revisions(true))))))',
-                     tgsis.storage_row_versions('tgsis', p_table, p_ids), v_reg.chunkcolumn, v_reg.keycolumn);
+                     ' AND (NOT $3 OR (%4$s))',
+                     tgsis.storage_row_versions('tgsis', p_table, p_ids), v_reg.chunkcolumn, v_reg.keycolumn,
+                     tgsis.visible_versions('f', '(SELECT tgsis.get_revisions(true))::integer[]'));
     v_versioned := EXISTS (SELECT FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table);
     -- the rights of today's row path: the view's privileges, the class's right on the object
     IF (v_n > 0 AND NOT has_table_privilege(tgsis.calling_role(), v_face::regclass, 'INSERT'))

@@ -83,8 +83,8 @@ BEGIN
     FOR v_side IN 1 .. 2 LOOP
         v_set := CASE v_side WHEN 1 THEN p_old_revisions ELSE p_new_revisions END;
         v_filter := CASE WHEN v_set IS NULL THEN format('v.geoid = $%s', 2 * v_side - 1)
-                         ELSE format('v.geoid = $%s AND (v.revision = ANY ($%s)) IS TRUE '
-                                     'AND (NOT v.revclosed OR NOT (v.lastrevs && $%2$s))', 2 * v_side - 1, 2 * v_side) END;
+                         ELSE format('v.geoid = $%s AND %s', 2 * v_side - 1,
+                                     tgsis.visible_versions('v', '$' || 2 * v_side)) END;
         v_vrtx[v_side] := format('SELECT v.vrtxid AS id, v.x, v.y, v.z FROM %s v WHERE %s',
                                  CASE WHEN v_set IS NULL THEN 'tgsis.vrtx' ELSE tgsis.storage_row_versions('tgsis', 'vrtx') END,
                                  v_filter);

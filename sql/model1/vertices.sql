@@ -9,6 +9,7 @@
 -- today's rows (tgsis.vrtx); so does a role that may read the face
 -- tgsis.vrtx but not the chunk table (correct, at the cost of a scan of
 -- the object). Visibility and rights as tgsis.vertex.
+-- The visibility test below is tgsis.visible_versions' text, kept static (tests/test_visible_versions.py compares).
 CREATE FUNCTION tgsis.vertices(p_geoid bigint, p_ids bigint[])
 RETURNS TABLE (vrtxid bigint, x double precision, y double precision, z double precision)
 LANGUAGE plpgsql

@@ -42,7 +42,7 @@ AS $$
 DECLARE
     v_dart  text;
     v_alpha text;
-    v_vis   text := '(%1$s IS NULL OR ((c.revision = ANY (%1$s)) IS TRUE AND (NOT c.revclosed OR NOT (c.lastrevs && %1$s))))';
+    v_vis   text := '(%1$s IS NULL OR (' || tgsis.visible_versions('c', '%1$s') || '))';
 BEGIN
     SELECT c.relname INTO v_dart FROM pg_catalog.pg_class c WHERE c.oid = p_dart AND c.relnamespace = 'tgsis'::regnamespace;
     SELECT c.relname INTO v_alpha FROM pg_catalog.pg_class c WHERE c.oid = p_alpha AND c.relnamespace = 'tgsis'::regnamespace;

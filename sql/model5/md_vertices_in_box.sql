@@ -20,6 +20,7 @@
 -- the chunk versions whose box (tgsis.point_chunk_box, GiST-indexed) meets
 -- the query's are decoded and their points tested as the rows are; the same
 -- points, bit for bit (tests/test_point_chunk_box.py).
+-- The visibility test below is tgsis.visible_versions' text, kept static (tests/test_visible_versions.py compares).
 CREATE FUNCTION tgsis.md_vertices_in_box(p_geoid bigint, p_axes text[], p_low double precision[], p_high double precision[])
 RETURNS TABLE (vrtxid bigint, coordinate double precision[])
 LANGUAGE plpgsql

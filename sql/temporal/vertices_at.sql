@@ -18,7 +18,8 @@
 --
 -- Model 3 between two geometry instants with tgsis.d4dvrtx stored in chunks
 -- (the view tgsis.d4dvrtx_arrays exists, made by the switch) and the caller
--- allowed to read those arrays: tgsis.evolving_chunk_vertices interpolates the
+-- allowed to read those arrays and the face (the arrays hold rows only for a
+-- caller who may read the face: a GRANT or REVOKE on it reaches them): tgsis.evolving_chunk_vertices interpolates the
 -- two instants' aligned chunk arrays slot by slot (the same operations, the
 -- same bits) instead of decoding both instants through the face and joining
 -- them; a caller who may read the face but not the arrays, and rows storage,
@@ -34,7 +35,8 @@ PARALLEL SAFE
 AS $$
     WITH f AS MATERIALIZED (SELECT * FROM tgsis.evolving_frame(p_geoid, p_t)),
     c AS MATERIALIZED (  -- d4dvrtx in chunks and its arrays readable by the caller: model 3 from the arrays
-        SELECT coalesce(has_table_privilege(to_regclass('tgsis.d4dvrtx_arrays'), 'SELECT'), false) AS arrays
+        SELECT coalesce(has_table_privilege(to_regclass('tgsis.d4dvrtx_arrays'), 'SELECT')
+                        AND has_table_privilege(to_regclass('tgsis.d4dvrtx'), 'SELECT'), false) AS arrays
     )
     SELECT s.vrtxid, s.x, s.y, s.z
       FROM tgsis.evolving_chunk_vertices(p_geoid, (SELECT f.timem FROM f), (SELECT f.t0 FROM f), (SELECT f.t1 FROM f),

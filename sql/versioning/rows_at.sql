@@ -22,9 +22,8 @@ BEGIN
     SELECT string_agg(format('v.%I', attname), ', ' ORDER BY attnum) INTO v_cols
       FROM pg_catalog.pg_attribute WHERE attrelid = v_rel AND attnum > 0 AND NOT attisdropped;
     -- (the stored row versions: <table>_ver, or a chunked model table's decoded chunk versions)
-    RETURN QUERY EXECUTE format('SELECT %s FROM %s v WHERE (v.revision = ANY ($1)) IS TRUE '
-                                'AND (NOT v.revclosed OR NOT (v.lastrevs && $1))',
-                                v_cols, tgsis.storage_rows(v_t))
+    RETURN QUERY EXECUTE format('SELECT %s FROM %s v WHERE %s',
+                                v_cols, tgsis.storage_rows(v_t), tgsis.visible_versions('v', '$1'))
                  USING v_set;
 END
 $$;

@@ -15,12 +15,10 @@ LANGUAGE sql
 IMMUTABLE
 PARALLEL SAFE
 AS $$
-    SELECT format('CREATE VIEW %I.%I AS SELECT %s FROM %I.%I v '
-                  'WHERE (v.revision = ANY ((SELECT tgsis.get_revisions(true))::integer[])) IS TRUE '
-                  'AND (NOT v.revclosed OR NOT (v.lastrevs && (SELECT tgsis.get_revisions(true))))',
+    SELECT format('CREATE VIEW %I.%I AS SELECT %s FROM %I.%I v WHERE %s',
                   p_schema, p_table,
                   (SELECT string_agg(format('v.%I', c), ', ' ORDER BY o) FROM unnest(p_columns) WITH ORDINALITY AS u(c, o)),
-                  p_schema, p_table || '_ver')
+                  p_schema, p_table || '_ver', tgsis.visible_versions('v', '(SELECT tgsis.get_revisions(true))::integer[]'))
 $$;
 
 COMMENT ON FUNCTION tgsis.versioned_view_source(text, text, text[]) IS

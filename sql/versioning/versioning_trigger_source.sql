@@ -115,7 +115,7 @@ DECLARE
     v_old_key  text;
     v_new_key  text;
     v_key_list text;
-    v_visible  CONSTANT text := '(v.revision = ANY (v_set)) IS TRUE AND (NOT v.revclosed OR NOT (v.lastrevs && v_set))';
+    v_visible  CONSTANT text := tgsis.visible_versions('v', 'v_set');
     v_current  text;
     v_same     text;
     v_dup      text;

@@ -30,6 +30,7 @@ Private to ``tgsis.db``.
 from __future__ import annotations
 
 import concurrent.futures
+import re
 import struct
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -53,6 +54,7 @@ __all__ = [
     "rows_request",
     "records_as_copy",
     "upload_chunks",
+    "visible_versions",
     "download_chunks",
     "download_tables",
     "object_rows",
@@ -334,13 +336,23 @@ def visible_chunks(layout: ChunkTable, revisions: Sequence[int] | None = None) -
     if not layout.versioned:
         return guard
     if revisions is not None:
-        return sql.SQL(
-            "{guard} AND (c.revision = ANY ({set})) IS TRUE AND (NOT c.revclosed OR NOT (c.lastrevs && {set}))"
-        ).format(guard=guard, set=sql.SQL("{}::integer[]").format(sql.Literal([int(r) for r in revisions])))
-    return sql.SQL(
-        "{} AND (c.revision = ANY ((SELECT tgsis.get_revisions(true))::integer[])) IS TRUE "
-        "AND (NOT c.revclosed OR NOT (c.lastrevs && (SELECT tgsis.get_revisions(true))))"
-    ).format(guard)
+        revision_set: sql.Composable = sql.SQL("{}::integer[]").format(sql.Literal([int(r) for r in revisions]))
+    else:
+        revision_set = sql.SQL("(SELECT tgsis.get_revisions(true))::integer[]")
+    return sql.SQL("{} AND {}").format(guard, visible_versions("c", revision_set))
+
+
+def visible_versions(alias: str, revision_set: sql.Composable) -> sql.Composed:
+    """The visibility predicate of stored versions, ``tgsis.visible_versions(alias, set)``'s text.
+
+    A version (row or chunk) seen by the revision set: made in a revision of the set, live or closed in none of it.
+    ``alias`` is the versions' range variable (quoted as ``quote_ident`` quotes it, but for a keyword),
+    ``revision_set`` an SQL expression of type ``integer[]`` (written
+    twice). tests/test_visible_versions.py compares the rendered text with the SQL function's.
+    """
+    return sql.SQL("({a}.revision = ANY ({s})) IS TRUE AND (NOT {a}.revclosed OR NOT ({a}.lastrevs && {s}))").format(
+        a=sql.SQL(alias) if re.fullmatch(r"[a-z_][a-z0-9_]*", alias) else sql.Identifier(alias), s=revision_set
+    )
 
 
 def chunk_copy_query(
