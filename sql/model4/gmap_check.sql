@@ -12,7 +12,8 @@
 -- face, which decodes every column of every slot. Read as the caller, when
 -- tgsis.gmap_chunk_arrays_sql gives the chunk statement (its checks: both
 -- tables in chunks, the chunk tables readable; its viewing set), with the
--- faces' visibility test and snapshot guard; else through the face.
+-- faces' visibility test (tgsis.visible_versions) and snapshot guard; else
+-- through the face.
 CREATE FUNCTION tgsis.gmap_check(p_geoid bigint)
 RETURNS TABLE (problem text, count bigint, darts bigint[])
 LANGUAGE plpgsql
@@ -46,14 +47,14 @@ BEGIN
     SELECT * INTO v_chunks FROM tgsis.gmap_chunk_arrays_sql('tgsis.gmap_dart', 'tgsis.gmap_alpha', 'nodeid', 'timem');
     IF v_chunks.arrays IS NOT NULL THEN
         -- each period's node range from the chunk arrays (a hole: a NULL timem, skipped), periods ascending
-        EXECUTE 'SELECT array_agg(d.t ORDER BY d.t), array_agg(d.lo ORDER BY d.t), array_agg(d.hi ORDER BY d.t)
+        EXECUTE format('SELECT array_agg(d.t ORDER BY d.t), array_agg(d.lo ORDER BY d.t), array_agg(d.hi ORDER BY d.t)
                    FROM (SELECT u.t, min(coalesce(c.vbase + u.r, u.w)) AS lo, max(coalesce(c.vbase + u.r, u.w)) AS hi
                            FROM tgsis.gmap_dart_chunk c
                           CROSS JOIN LATERAL unnest(c.timem, c.nodeid, c.nodeid_wide) AS u (t, r, w)
                           WHERE (SELECT tgsis.chunk_snapshot_guard(''tgsis.gmap_dart_chunk''::regclass)) AND c.geoid = $1
-                            AND ($2 IS NULL OR ((c.revision = ANY ($2)) IS TRUE AND (NOT c.revclosed OR NOT (c.lastrevs && $2))))
+                            AND ($2 IS NULL OR (%s))
                             AND u.t IS NOT NULL
-                          GROUP BY u.t) AS d'
+                          GROUP BY u.t) AS d', tgsis.visible_versions('c', '$2'))
            INTO v_times, v_los, v_his USING p_geoid, v_chunks.dartset;
         v_first := v_times[1];
         v_last := v_times[cardinality(v_times)];
