@@ -1,0 +1,100 @@
+"""Answers that could be silently wrong (plan O, G): each test here failed on main before its fix.
+
+1. A stored box that differs from the measured one only by a NaN was left stale: the comparisons read the box
+   through ``cube_ll_coord`` / ``cube_ur_coord``, which take the least and the greatest of a corner pair by ``<``
+   and ``>`` and so hide a NaN (``(NaN, 0, 0),(1, 1, 1)`` reads as ``(1, 0, 0),(1, 1, 1)``).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import psycopg
+
+import tgsis
+from tgsis.db import features as F
+
+Conn = psycopg.Connection[Any]
+
+#: how a box is read here: its 2m coordinates as stored (low corner, then high), NaN kept where it is
+STORED = "SELECT array_agg(cube_coord(bbox, d) ORDER BY d) FROM tgsis.geometry, generate_series(1, 6) AS d WHERE geoid = %s"
+
+
+def _one(conn: Conn, query: str, params: tuple[Any, ...] = ()) -> Any:
+    row = conn.execute(query, params).fetchone()
+    assert row is not None, query
+    return row[0]
+
+
+def _plane(name: str) -> tgsis.Surface:
+    """Two triangles in the plane x = 1: the measured box is (1, 0, 0),(1, 1, 1), its x corners equal."""
+    vertices = np.array([[1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [1.0, 0.0, 1.0], [1.0, 1.0, 1.0]])
+    return tgsis.Surface(vertices, np.array([[0, 1, 2], [1, 3, 2]]), name=name)
+
+
+def _stale_nan_box(conn: Conn, geoid: int) -> None:
+    """The stored box made stale by a NaN at its low x alone (cube_ll_coord and cube_ur_coord both read 1 there)."""
+    conn.execute(
+        "UPDATE tgsis.geometry SET bbox = cube(ARRAY['NaN', 0, 0]::float8[], ARRAY[1, 1, 1]::float8[]) WHERE geoid = %s",
+        (geoid,),
+    )
+    assert np.isnan(_one(conn, STORED, (geoid,))[0])
+    assert _one(conn, "SELECT cube_ll_coord(bbox, 1) = cube_ur_coord(bbox, 1) FROM tgsis.geometry WHERE geoid = %s",
+                (geoid,))  # fmt: skip
+
+
+def test_the_sql_merge_brings_a_box_stale_only_by_a_nan_up_to_date(conn: Conn) -> None:
+    """tgsis.merge_geometry_row (the SQL merge's last step) compared the box through cube_ll_coord / cube_ur_coord:
+    a box (NaN, 0, 0),(1, 1, 1) read as the measured (1, 0, 0),(1, 1, 1), so it said 0 rows changed and kept the
+    NaN."""
+    surfaces = F.create_feature_class(conn, "planes", "SURFACE")
+    F.insert_feature(conn, surfaces, _plane("p"))
+    geoid = _one(conn, "SELECT _geoid FROM planes")
+    conn.commit()
+    _stale_nan_box(conn, geoid)
+    working = _one(conn, "SELECT workingset FROM tgsis.versions WHERE name = 'DEFAULT'")
+    assert _one(conn, "SELECT tgsis.merge_geometry_row(%s, 'trgl', %s)", (geoid, working)) == 1
+    assert _one(conn, STORED, (geoid,)) == [1.0, 0.0, 0.0, 1.0, 1.0, 1.0]
+    assert _one(conn, "SELECT tgsis.merge_geometry_row(%s, 'trgl', %s)", (geoid, working)) == 0  # now equal
+
+
+def test_the_python_write_brings_a_box_stale_only_by_a_nan_up_to_date(conn: Conn) -> None:
+    """tgsis.db._state_write.update_geometry_row, the Python writers' twin of the above, compared alike."""
+    from tgsis.db._state_write import update_geometry_row
+
+    surfaces = F.create_feature_class(conn, "planes", "SURFACE")
+    F.insert_feature(conn, surfaces, _plane("p"))
+    geoid = _one(conn, "SELECT _geoid FROM planes")
+    conn.commit()
+    _stale_nan_box(conn, geoid)
+    bounds = np.array([[1.0, 0.0, 0.0], [1.0, 1.0, 1.0]])
+    assert update_geometry_row(conn, geoid, bounds, 4, 2) == 1
+    assert _one(conn, STORED, (geoid,)) == [1.0, 0.0, 0.0, 1.0, 1.0, 1.0]
+    assert update_geometry_row(conn, geoid, bounds, 4, 2) == 0
+
+
+def test_a_collections_box_keeps_its_members_finite_corners_beside_a_nan(conn: Conn) -> None:
+    """tgsis.refresh_geometry of a collection took each member's corners through cube_ll_coord / cube_ur_coord: a
+    member (0, 0, 0),(NaN, 1, 1) (a vertex of NaN x: its measured box) read as (NaN, 0, 0),(NaN, 1, 1), so the
+    union of it with (2, 0, 0),(3, 1, 1) was (2, 0, 0),(NaN, 1, 1), its low x 2 where the members' vertices reach
+    0; and tgsis.check_geometry, comparing by cube's = (the same reading), called it up to date."""
+    a = _one(conn, "SELECT tgsis.new_geometry('SURFACE', 'a', ARRAY[0, 0, 0, 1, 1, 1]::float8[], 3, 1)")
+    conn.execute(  # new_geometry takes finite bounds only; the measured box of a NaN vertex, as refresh writes it
+        "UPDATE tgsis.geometry SET bbox = cube(ARRAY[0, 0, 0]::float8[], ARRAY['NaN', 1, 1]::float8[]) WHERE geoid = %s",
+        (a,),
+    )
+    b = _one(conn, "SELECT tgsis.new_geometry('SURFACE', 'b', ARRAY[2, 0, 0, 3, 1, 1]::float8[], 3, 1)")
+    assert _one(conn, STORED, (a,))[:3] == [0.0, 0.0, 0.0]
+    c = _one(conn, "SELECT tgsis.new_geometry('GEOMETRYCOLLECTION', 'c', NULL, 0, 0, %s)", ([a, b],))
+    conn.execute("SELECT tgsis.refresh_geometry(%s)", (c,))
+    got = _one(conn, STORED, (c,))
+    assert got[:3] == [0.0, 0.0, 0.0] and np.isnan(got[3]) and got[4:] == [1.0, 1.0], got
+    assert conn.execute("SELECT * FROM tgsis.check_geometry(%s)", (c,)).fetchall() == []
+    conn.execute(
+        "UPDATE tgsis.geometry SET bbox = cube(ARRAY[2, 0, 0]::float8[], ARRAY['NaN', 1, 1]::float8[]) WHERE geoid = %s",
+        (c,),
+    )
+    assert [p for p, *_ in conn.execute("SELECT * FROM tgsis.check_geometry(%s)", (c,)).fetchall()] == [
+        "bounding box or counts out of date (run tgsis.refresh_geometry)"
+    ]
