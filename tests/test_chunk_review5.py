@@ -11,14 +11,20 @@ from typing import Any
 
 import numpy as np
 import psycopg
+import pytest
 
 import tgsis
+from tgsis import gmaps
 from tgsis.db import features as F
+from tgsis.db import gmaps as G
+from tgsis.errors import InvalidInputError
 
 Conn = psycopg.Connection[Any]
 
 #: how a box is read here: its 2m coordinates as stored (low corner, then high), NaN kept where it is
-STORED = "SELECT array_agg(cube_coord(bbox, d) ORDER BY d) FROM tgsis.geometry, generate_series(1, 6) AS d WHERE geoid = %s"
+STORED = (
+    "SELECT array_agg(cube_coord(bbox, d) ORDER BY d) FROM tgsis.geometry, generate_series(1, 6) AS d WHERE geoid = %s"
+)
 
 
 def _one(conn: Conn, query: str, params: tuple[Any, ...] = ()) -> Any:
@@ -98,3 +104,74 @@ def test_a_collections_box_keeps_its_members_finite_corners_beside_a_nan(conn: C
     assert [p for p, *_ in conn.execute("SELECT * FROM tgsis.check_geometry(%s)", (c,)).fetchall()] == [
         "bounding box or counts out of date (run tgsis.refresh_geometry)"
     ]
+
+
+def _lifting(first_end: float, second_start: float) -> gmaps.EvolvingGMap:
+    """A square lifted from t = -1 to 1 in two topology periods meeting at 0, given as ``first_end`` (the first's
+    last instant) and ``second_start`` (the second's topology instant): -0.0 or 0.0, equal as floats."""
+    square = gmaps.GMap.from_triangles([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], [[0, 1, 2], [0, 2, 3]])
+    up = [0.0, 0.0, 1.0]
+    first = gmaps.GMapPeriod([-1.0, first_end], square, np.stack([square.points, square.points + up]), level=2)
+    second = gmaps.GMapPeriod(
+        [second_start, 1.0], square, np.stack([square.points + up, square.points + np.multiply(up, 3)]), level=2
+    )
+    return gmaps.EvolvingGMap([first, second], name="lifted")
+
+
+@pytest.mark.parametrize("ends", [(-0.0, 0.0), (0.0, -0.0), (-0.0, -0.0)], ids=["m0-0", "0-m0", "m0-m0"])
+def test_a_g_map_instant_of_minus_zero_is_the_instant_zero_in_sql_and_in_python(
+    conn: Conn, ends: tuple[float, float]
+) -> None:
+    fc = F.create_feature_class(conn, "lifted", "GMAP", time_model="GMAP", cell_level=2)
+    evolving = _lifting(*ends)
+    geoid = F.insert_feature(conn, fc, evolving)
+    conn.commit()
+    # stored with the bits given (the server's path on chunks: the client codec declines a key of -0.0)
+    stored = conn.execute(
+        "SELECT float8send(timet) FROM tgsis.gmap_timet WHERE geoid = %s ORDER BY timem, timet", (geoid,)
+    ).fetchall()
+    assert [bytes(b) for (b,) in stored][1:3] == [
+        np.float64(ends[0]).tobytes()[::-1],
+        np.float64(ends[1]).tobytes()[::-1],
+    ]
+    with pytest.raises(psycopg.errors.UniqueViolation):  # one instant: 0.0 and -0.0 are one key
+        conn.execute("INSERT INTO tgsis.gmap_timem (geoid, timem) VALUES (%s, %s)", (geoid, -ends[1]))
+    conn.rollback()
+    fetched = G.fetch_gmap(conn, fc, geoid)
+    sql_points = "SELECT array_agg(array_send(coordinate) ORDER BY nodeid) FROM tgsis.gmap_points_at(%s, %s)"
+    answers = []
+    for t in (-0.0, 0.0):
+        python, stored_at, read = evolving.at(t), fetched.at(t), G.gmap_at(conn, geoid, t)
+        assert python is not None and stored_at is not None and read is not None
+        assert python.same_as(stored_at) and python.same_as(read), t
+        assert np.array_equal(read.points[:, 2], np.ones(4)), t  # lifted by 1 at 0
+        answers.append(
+            (
+                _one(conn, sql_points, (geoid, t)),
+                conn.execute("SELECT * FROM tgsis.gmap_frame(%s, %s)", (geoid, t)).fetchall(),
+            )
+        )
+    assert answers[0] == answers[1]
+    assert conn.execute("SELECT * FROM tgsis.gmap_check(%s)", (geoid,)).fetchall() == []
+
+
+def test_a_g_map_instant_of_nan_is_refused_by_sql_and_by_python_alike(conn: Conn) -> None:
+    fc = F.create_feature_class(conn, "lifted", "GMAP", time_model="GMAP", cell_level=2)
+    geoid = F.insert_feature(conn, fc, _lifting(0.0, 0.0))
+    conn.commit()
+    nan = float("nan")
+    with pytest.raises(InvalidInputError, match="model time NaN is not a time") as python:
+        G.gmap_at(conn, geoid, nan)
+    assert python.value.code == "TG100"
+    for query in ("SELECT * FROM tgsis.gmap_at(%s, %s)", "SELECT * FROM tgsis.gmap_points_at(%s, %s)"):
+        with pytest.raises(psycopg.DatabaseError, match="model time NaN is not a time") as sql_error:
+            conn.execute(query, (geoid, nan)).fetchall()
+        assert sql_error.value.sqlstate == "TG100" and sql_error.value.diag.message_hint, query
+        conn.rollback()
+    with pytest.raises(InvalidInputError):  # a G-map of a NaN instant is not made, so not stored
+        _lifting(nan, 0.0)
+    for stored in ("INSERT INTO tgsis.gmap_timem (geoid, timem) VALUES (%s, 'NaN')",
+                   "INSERT INTO tgsis.gmap_timet (geoid, timem, timet) VALUES (%s, 0, 'NaN')"):  # fmt: skip
+        with pytest.raises(psycopg.errors.CheckViolation):  # psql: the tables' CHECK (finite instants)
+            conn.execute(stored, (geoid,))
+        conn.rollback()
