@@ -19,6 +19,8 @@ from tgsis.db import features as F
 from tgsis.db import gmaps as G
 from tgsis.errors import InvalidInputError
 
+from tests.storage_data import in_chunks, storage_of, switch_tables, tables_as_rows
+
 Conn = psycopg.Connection[Any]
 
 #: how a box is read here: its 2m coordinates as stored (low corner, then high), NaN kept where it is
@@ -175,3 +177,49 @@ def test_a_g_map_instant_of_nan_is_refused_by_sql_and_by_python_alike(conn: Conn
         with pytest.raises(psycopg.errors.CheckViolation):  # psql: the tables' CHECK (finite instants)
             conn.execute(stored, (geoid,))
         conn.rollback()
+
+
+def _indexes(conn: Conn, relation: str) -> list[str]:
+    return [r[0] for r in conn.execute("SELECT indexrelid::regclass::text FROM pg_index WHERE indrelid = %s::regclass"
+                                       " ORDER BY 1", (relation,)).fetchall()]  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    "definition",
+    ["(geoid, revision DESC)", "(geoid) WHERE NOT revclosed", "USING gin (lastrevs)"],
+    ids=["revision", "revclosed", "lastrevs"],
+)
+def test_a_dbas_index_on_the_revision_columns_refuses_the_switch_into_chunks(conn: Conn, definition: str) -> None:
+    tables_as_rows(conn, ("vrtx",))
+    tgsis.enable_feature_versioning(conn)
+    conn.commit()
+    assert storage_of(conn, "vrtx") == "tgsis.vrtx_ver"
+    conn.execute(f"CREATE INDEX dba_idx ON tgsis.vrtx_ver {definition}")
+    conn.commit()
+    before = _indexes(conn, "tgsis.vrtx_ver")
+    with pytest.raises(psycopg.DatabaseError, match="dba_idx") as refused:
+        conn.execute("SELECT tgsis.store_in_chunks('vrtx')")
+    assert refused.value.sqlstate == "TG202" and refused.value.diag.message_hint, refused.value
+    conn.rollback()
+    assert not in_chunks(conn) and _indexes(conn, "tgsis.vrtx_ver") == before
+    conn.execute("DROP INDEX tgsis.dba_idx")  # as the hint says: then the switch goes
+    switch_tables(conn, ("vrtx",), "chunks")
+    assert in_chunks(conn)
+
+
+@pytest.mark.parametrize("definition", ["(revision, geoid)", "(geoid, chunk)"], ids=["revision", "key"])
+def test_a_dbas_index_on_a_chunk_table_refuses_the_way_back(conn: Conn, definition: str) -> None:
+    tables_as_rows(conn, ("vrtx",))
+    tgsis.enable_feature_versioning(conn)
+    switch_tables(conn, ("vrtx",), "chunks")
+    conn.execute(f"CREATE INDEX dba_idx ON tgsis.vrtx_chunk {definition}")
+    conn.commit()
+    before = _indexes(conn, "tgsis.vrtx_chunk")
+    with pytest.raises(psycopg.DatabaseError, match="dba_idx") as refused:
+        conn.execute("SELECT tgsis.store_in_rows('vrtx')")
+    assert refused.value.sqlstate == "TG202" and refused.value.diag.message_hint, refused.value
+    conn.rollback()
+    assert in_chunks(conn) and _indexes(conn, "tgsis.vrtx_chunk") == before
+    conn.execute("DROP INDEX tgsis.dba_idx")
+    switch_tables(conn, ("vrtx",), "rows")
+    assert not in_chunks(conn)
