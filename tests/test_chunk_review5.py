@@ -19,6 +19,7 @@ from tgsis.db import features as F
 from tgsis.db import gmaps as G
 from tgsis.errors import InvalidInputError
 
+from tests.roles import login_roles
 from tests.storage_data import in_chunks, storage_of, switch_tables, tables_as_rows
 
 Conn = psycopg.Connection[Any]
@@ -223,3 +224,50 @@ def test_a_dbas_index_on_a_chunk_table_refuses_the_way_back(conn: Conn, definiti
     conn.execute("DROP INDEX tgsis.dba_idx")
     switch_tables(conn, ("vrtx",), "rows")
     assert not in_chunks(conn)
+
+
+FILL = "SELECT * FROM tgsis.fill_property_rows(%s, '{\"facies\": 4}')"
+
+
+def _fill_outcome(conn: Conn, name: str) -> tuple[str | None, list[Any]]:
+    try:
+        made = conn.execute(FILL, (name,)).fetchall()
+    except psycopg.DatabaseError as error:
+        conn.rollback()
+        return error.sqlstate, [conn.execute(f"SELECT count(*) FROM public.{name}_simplexpros").fetchone()]
+    conn.commit()
+    return None, made
+
+
+def test_fill_property_rows_answers_another_roles_object_lock_as_on_rows(conn: Conn, db_dsn: str) -> None:
+    tgsis.enable_feature_versioning(conn)
+    for name in ("onrows", "inchunks"):
+        tgsis.create_feature_class(
+            conn, name, "SURFACE", cell_properties=[tgsis.Property("facies", "int", alignment="CELL")], versioned=False
+        )
+    conn.commit()
+    for name, storage in (("onrows", "rows"), ("inchunks", "chunks")):
+        if _one(conn, "SELECT tgsis.stored_in_chunks('public', %s)", (f"{name}_simplexpros",)) != (storage == "chunks"):
+            conn.execute(f"SELECT tgsis.store_class_in_{storage}(%s)", (name,))
+    plane = _plane("p")
+    plane = tgsis.Surface(plane.vertices, plane.cells, cell_properties={"facies": np.array([7, 8], dtype=np.int32)})
+    geoids = {name: F.insert_feature(conn, name, plane) for name in ("onrows", "inchunks")}
+    for name, geoid in geoids.items():  # the rows an older tgsis did not make, as fill_property_rows repairs
+        conn.execute(f"DELETE FROM public.{name}_simplexpros WHERE _geoid = %s", (geoid,))
+    conn.commit()
+    assert _one(conn, "SELECT tgsis.stored_in_chunks('public', 'inchunks_simplexpros')")
+    assert not _one(conn, "SELECT tgsis.stored_in_chunks('public', 'onrows_simplexpros')")
+    with login_roles(db_dsn, {"ed": "tgsis_editor"}) as made:
+        ed = made.connect("ed")
+        for geoid in geoids.values():
+            ed.execute("SELECT tgsis.lock_objects('DEFAULT', 'feature', %s, true)", ([str(geoid)],))
+        ed.commit()
+        refused = {name: _fill_outcome(conn, name) for name in geoids}
+        assert refused["onrows"] == refused["inchunks"] == ("TG303", [(0,)]), refused
+        for geoid in geoids.values():
+            ed.execute("SELECT tgsis.unlock_objects('DEFAULT', 'feature', %s)", ([str(geoid)],))
+        ed.commit()
+        ed.close()
+    done = {name: _fill_outcome(conn, name) for name in geoids}
+    for name in geoids:
+        assert done[name] == (None, [(f"{name}_cellpros", 0, 0), (f"{name}_simplexpros", 1, 2)]), done
