@@ -14,13 +14,12 @@ import psycopg
 import pytest
 
 import tgsis
+from tests.roles import login_roles
+from tests.storage_data import in_chunks, storage_of, switch_tables, tables_as_rows
 from tgsis import gmaps
 from tgsis.db import features as F
 from tgsis.db import gmaps as G
 from tgsis.errors import InvalidInputError
-
-from tests.roles import login_roles
-from tests.storage_data import in_chunks, storage_of, switch_tables, tables_as_rows
 
 Conn = psycopg.Connection[Any]
 
