@@ -56,6 +56,7 @@ def test_the_sql_merge_brings_a_box_stale_only_by_a_nan_up_to_date(conn: Conn) -
     """tgsis.merge_geometry_row (the SQL merge's last step) compared the box through cube_ll_coord / cube_ur_coord:
     a box (NaN, 0, 0),(1, 1, 1) read as the measured (1, 0, 0),(1, 1, 1), so it said 0 rows changed and kept the
     NaN."""
+    tgsis.enable_feature_versioning(conn)  # the merge's step reads row versions
     surfaces = F.create_feature_class(conn, "planes", "SURFACE")
     F.insert_feature(conn, surfaces, _plane("p"))
     geoid = _one(conn, "SELECT _geoid FROM planes")
