@@ -55,6 +55,8 @@ BEGIN
             USING ERRCODE = 'TG201', DETAIL = 'The storage switch needs these names for the row definition and the new face.';
     END IF;
     v_storage := tgsis.storage_table('tgsis', p_table)::regclass;
+    -- a DBA's index on the row versions' revision columns cannot be kept: refused by name (TG202), nothing changed
+    PERFORM tgsis.unkept_indexes_check(v_storage, false, format('tgsis.store_in_chunks(%L)', p_table));
     -- partitioned storage (tgsis.partition_model_storage: HASH (geoid), N partitions of modulus N): the chunk
     -- table is partitioned the same way once filled (tgsis.partition_chunk_storage); another scheme is refused
     IF (SELECT c.relkind FROM pg_class c WHERE c.oid = v_storage) = 'p' THEN

@@ -55,6 +55,8 @@ BEGIN
                   DETAIL = 'tgsis.store_in_rows makes one row table; the chunk storage is hash-partitioned (tgsis.partition_model_storage).',
                   HINT = 'keep this table stored in chunks';
     END IF;
+    -- a DBA's index on the chunk table would go with it: refused by name (TG202), nothing changed
+    PERFORM tgsis.unkept_indexes_check(v_chunk, true, format('tgsis.store_in_rows(%L)', p_table));
     SELECT * INTO v_versioned FROM tgsis.versioned_tables t WHERE t.schemaname = 'tgsis' AND t.tablename = p_table;
     IF v_versioned.tablename IS NOT NULL THEN
         -- the versions' sets stay as they are until the switch is done (as tgsis.chunks_to_rows holds them); the

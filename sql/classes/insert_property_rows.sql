@@ -26,7 +26,10 @@
 -- (settings tgsis.version and tgsis.revision cleared for that INSERT and
 -- put back after it): the rows made are the table's one state, which every
 -- version reads, as the rows path's direct INSERT into the plain table
--- writes them from any version (the face would refuse TG305). Returns the geometries and the rows
+-- writes them from any version (the face would refuse TG305). Unversioned,
+-- another role's exclusive lock on a feature (in DEFAULT) refuses the rows
+-- on both storages alike (TG303, tgsis.check_objects_unlocked), as the face
+-- refuses them. Returns the geometries and the rows
 -- (vertices or cells, not row versions) given. Runs as its callers (tgsis's
 -- owner).
 CREATE FUNCTION tgsis.insert_property_rows(p_class tgsis.catalog, p_table text, p_geoids bigint[], p_columns text[],
@@ -96,6 +99,13 @@ BEGIN
                                          tgsis.storage_row_versions('tgsis', v_source),
                                          CASE WHEN v_source_versioned AND NOT v_versioned THEN ' AND NOT s.revclosed' ELSE '' END);
     END LOOP;
+    IF NOT v_versioned AND EXISTS (SELECT FROM tgsis.object_locks l
+                                    WHERE l.objectclass = 'feature' AND l.objectkey = ANY (p_geoids::text[])) THEN
+        -- another role's exclusive lock in DEFAULT (the only version that can lock a feature of a class without
+        -- versioning) stops these rows on both storages alike: the face checks it (tgsis.chunk_face_write), and the
+        -- rows path wrote past it (tests/test_chunk_review5.py); refused naming the objects (TG303), nothing written
+        PERFORM tgsis.check_objects_unlocked('feature', p_geoids::text[], tgsis.version_id('DEFAULT'));
+    END IF;
     IF v_chunked THEN
         -- the face checks the session's version (TG305 outside DEFAULT's working revision), the rows path does not:
         -- write as DEFAULT's working revision, whose one state every version reads, and put the settings back

@@ -105,6 +105,8 @@ BEGIN
         END IF;
         v_table := format('%I.%I', v_class.schemaname, v_tab)::regclass;
         v_storage := tgsis.storage_table(v_class.schemaname, v_tab)::regclass;  -- the table, or its <table>_ver
+        -- a DBA's index on the row versions' revision columns cannot be kept: refused by name (TG202)
+        PERFORM tgsis.unkept_indexes_check(v_storage, false, format('tgsis.store_class_in_chunks(%L)', p_class));
         EXECUTE format('LOCK TABLE %s IN SHARE ROW EXCLUSIVE MODE', v_storage);
         -- what the table carries that a view cannot, or that its drop would take along: row-level security and its
         -- policies (the rows a role may see), a user's trigger, a view or foreign key over it; dropped with the rows,

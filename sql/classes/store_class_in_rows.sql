@@ -58,10 +58,12 @@ BEGIN
         PERFORM FROM tgsis.versions v ORDER BY v.versionid FOR SHARE;
         v_marks := tgsis.conflict_marks();
     END IF;
-    -- both chunk tables locked before either moves
+    -- both chunk tables locked before either moves; a DBA's index on either would go with it: refused by name (TG202)
     FOREACH v_tab IN ARRAY v_tables LOOP
         EXECUTE format('LOCK TABLE %s IN SHARE ROW EXCLUSIVE MODE',
                        tgsis.chunk_relation(format('%I.%I', v_class.schemaname, v_tab), '_chunk'));
+        PERFORM tgsis.unkept_indexes_check(tgsis.chunk_relation(format('%I.%I', v_class.schemaname, v_tab), '_chunk')::regclass,
+                                           true, format('tgsis.store_class_in_rows(%L)', p_class));
     END LOOP;
     FOREACH v_tab IN ARRAY v_tables LOOP
         v_name := format('%I.%I', v_class.schemaname, v_tab);

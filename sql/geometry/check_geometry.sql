@@ -31,12 +31,22 @@ BEGIN
         RETURN QUERY
             SELECT 'bounding box or counts out of date (run tgsis.refresh_geometry)'::text, 1::bigint, NULL::text
               FROM (SELECT coalesce(sum(g.nvrtx), 0) AS n, coalesce(sum(g.ncell), 0) AS m,
+                           -- the members' union as tgsis.refresh_geometry takes it, compared by the coordinates
+                           -- as stored (cube's = reads them through the least and greatest of a corner pair by <
+                           -- and >, which hides a NaN)
                            CASE WHEN count(g.bbox) > 0 THEN
-                               cube(ARRAY[min(cube_ll_coord(g.bbox, 1)), min(cube_ll_coord(g.bbox, 2)), min(cube_ll_coord(g.bbox, 3))],
-                                    ARRAY[max(cube_ur_coord(g.bbox, 1)), max(cube_ur_coord(g.bbox, 2)), max(cube_ur_coord(g.bbox, 3))])
-                           END AS bbox
+                               ARRAY[min(least(cube_coord(g.bbox, 1), cube_coord(g.bbox, 4))),
+                                     min(least(cube_coord(g.bbox, 2), cube_coord(g.bbox, 5))),
+                                     min(least(cube_coord(g.bbox, 3), cube_coord(g.bbox, 6))),
+                                     max(greatest(cube_coord(g.bbox, 1), cube_coord(g.bbox, 4))),
+                                     max(greatest(cube_coord(g.bbox, 2), cube_coord(g.bbox, 5))),
+                                     max(greatest(cube_coord(g.bbox, 3), cube_coord(g.bbox, 6)))]
+                           END AS corners
                       FROM tgsis.geometry g WHERE g.geoid = ANY (v_geo.geoids)) AS u
-             WHERE u.n <> v_geo.nvrtx OR u.m <> v_geo.ncell OR u.bbox IS DISTINCT FROM v_geo.bbox;
+             WHERE u.n <> v_geo.nvrtx OR u.m <> v_geo.ncell
+                OR u.corners IS DISTINCT FROM
+                   (SELECT array_agg(cube_coord(v_geo.bbox, d) ORDER BY d)
+                      FROM generate_series(1, 2 * cube_dim(v_geo.bbox)) AS d);
         RETURN;
     END IF;
 

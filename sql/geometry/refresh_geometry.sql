@@ -23,9 +23,17 @@ BEGIN
     END IF;
 
     IF v_geotype = 'GEOMETRYCOLLECTION' THEN
-        SELECT CASE WHEN count(m.bbox) > 0 THEN  -- members without vertices have no bbox
-                    cube(ARRAY[min(cube_ll_coord(m.bbox, 1)), min(cube_ll_coord(m.bbox, 2)), min(cube_ll_coord(m.bbox, 3))],
-                         ARRAY[max(cube_ur_coord(m.bbox, 1)), max(cube_ur_coord(m.bbox, 2)), max(cube_ur_coord(m.bbox, 3))])
+        -- members without vertices have no bbox; a member's corners are taken as stored (cube_coord), each axis's
+        -- least and greatest by float8's order (least/greatest, min/max: NaN after every number), as a box is
+        -- measured from vertices: cube_ll_coord / cube_ur_coord compare by < and >, which a NaN fails both ways,
+        -- and so read (0, 0, 0),(NaN, 1, 1) as (NaN, 0, 0),(NaN, 1, 1), losing the member's finite low corner
+        SELECT CASE WHEN count(m.bbox) > 0 THEN
+                    cube(ARRAY[min(least(cube_coord(m.bbox, 1), cube_coord(m.bbox, 4))),
+                               min(least(cube_coord(m.bbox, 2), cube_coord(m.bbox, 5))),
+                               min(least(cube_coord(m.bbox, 3), cube_coord(m.bbox, 6)))],
+                         ARRAY[max(greatest(cube_coord(m.bbox, 1), cube_coord(m.bbox, 4))),
+                               max(greatest(cube_coord(m.bbox, 2), cube_coord(m.bbox, 5))),
+                               max(greatest(cube_coord(m.bbox, 3), cube_coord(m.bbox, 6)))])
                END,
                coalesce(sum(m.nvrtx), 0), coalesce(sum(m.ncell), 0)
           INTO v_bbox, v_nvrtx, v_ncell

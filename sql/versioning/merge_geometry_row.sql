@@ -4,7 +4,12 @@
 -- the box and counts of the object's vertex and cell rows in p_set, the
 -- session's working set (one pass over each: the rows its views show),
 -- written through the view tgsis.geometry only
--- when they differ (0 when equal). cube's functions are named by the schema
+-- when they differ (0 when equal). The stored box is compared by its 2m
+-- coordinates as stored (cube_coord; float8[]'s equality, NaN equal to NaN):
+-- cube_ll_coord / cube_ur_coord take the least and greatest of a corner pair
+-- by < and >, which hides a NaN, so a box (NaN, 0, 0),(1, 1, 1) read as the
+-- measured (1, 0, 0),(1, 1, 1) and was left stale (tests/test_chunk_review5.py).
+-- cube's functions are named by the schema
 -- the extension is in. A table stored in chunks (tgsis.stored_in_chunks) is
 -- read from its chunk versions in p_set, as tgsis.static_extent reads them:
 -- the cells counted from each chunk's array length less its holes, the
@@ -61,10 +66,10 @@ BEGIN
     EXECUTE format('UPDATE tgsis.geometry SET bbox = %1$I.cube($1, $2), nvrtx = $3, ncell = $4
                      WHERE geoid = $5
                        AND ((bbox IS NULL) <> ($1 IS NULL)
-                            OR (bbox IS NOT NULL AND ARRAY[%1$I.cube_ll_coord(bbox, 1), %1$I.cube_ll_coord(bbox, 2),
-                                                           %1$I.cube_ll_coord(bbox, 3), %1$I.cube_ur_coord(bbox, 1),
-                                                           %1$I.cube_ur_coord(bbox, 2), %1$I.cube_ur_coord(bbox, 3)]
-                                                     IS DISTINCT FROM $1 || $2)
+                            OR (bbox IS NOT NULL
+                                AND ARRAY(SELECT %1$I.cube_coord(bbox, d)
+                                            FROM generate_series(1, 2 * %1$I.cube_dim(bbox)) AS d ORDER BY d)
+                                    IS DISTINCT FROM $1 || $2)
                             OR nvrtx <> $3 OR ncell <> $4)', v_cube)
       USING v_low, v_high, v_n, v_m, p_geoid;
     GET DIAGNOSTICS v_changed = ROW_COUNT;

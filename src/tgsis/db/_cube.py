@@ -15,7 +15,7 @@ from typing import Any
 import psycopg
 from psycopg import sql
 
-__all__ = ["box_corners", "cube_name"]
+__all__ = ["box_corners", "box_coordinates", "cube_name"]
 
 Conn = psycopg.Connection[Any]
 
@@ -44,3 +44,18 @@ def box_corners(conn: Conn, box: sql.Composable, order: str = "xyz") -> sql.Comp
     if order == "axes":
         return sql.SQL(", ").join([v for pair in zip(low, high, strict=True) for v in pair])
     raise ValueError(f"order {order!r} is not xyz or axes")
+
+
+def box_coordinates(conn: Conn, box: sql.Composable) -> sql.Composed:
+    """The cube ``box``'s 2m coordinates as stored (low corner, then high), as one ``float8[]`` expression.
+
+    For comparing a stored box with a measured one: :func:`box_corners` reads
+    through ``cube_ll_coord`` / ``cube_ur_coord``, which take the least and the
+    greatest of a corner pair by ``<`` and ``>`` and so hide a NaN (a box
+    ``(NaN, 0, 0),(1, 1, 1)`` reads as ``(1, 0, 0),(1, 1, 1)``); these are the
+    coordinates ``cube(low, high)`` stored, which ``float8[]``'s equality
+    compares with NaN equal to NaN.
+    """
+    return sql.SQL("ARRAY(SELECT {coord}({box}, d) FROM generate_series(1, 2 * {dim}({box})) AS d ORDER BY d)").format(
+        coord=cube_name(conn, "cube_coord"), dim=cube_name(conn, "cube_dim"), box=box
+    )

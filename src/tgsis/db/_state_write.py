@@ -27,7 +27,7 @@ import psycopg
 from psycopg import sql
 
 from tgsis.db._chunk_write import stored_in_chunks, swap_object_rows, write_object_rows
-from tgsis.db._cube import box_corners, cube_name
+from tgsis.db._cube import box_coordinates, cube_name
 from tgsis.db._property_chunks import write_property_rows
 from tgsis.db._static import SIMPLEX, copy_extra_rows, part_rows
 from tgsis.db._transfer import Storage, delete_chunk_rows, replace_chunk_rows
@@ -89,8 +89,8 @@ def update_geometry_row(
     box = sql.SQL("{}(%(low)s::float8[], %(high)s::float8[])").format(cube_name(conn, "cube"))
     box_differs = sql.SQL(
         "(bbox IS NULL) <> (%(low)s::float8[] IS NULL) "
-        "OR (bbox IS NOT NULL AND ARRAY[{corners}] IS DISTINCT FROM %(low)s::float8[] || %(high)s::float8[])"
-    ).format(corners=box_corners(conn, sql.Identifier("bbox")))
+        "OR (bbox IS NOT NULL AND {stored} IS DISTINCT FROM %(low)s::float8[] || %(high)s::float8[])"
+    ).format(stored=box_coordinates(conn, sql.Identifier("bbox")))  # as stored: a NaN is not hidden
     naming = sql.SQL(", geoname = %(name)s") if set_name else sql.SQL("")
     name_differs = sql.SQL(" OR geoname IS DISTINCT FROM %(name)s") if set_name else sql.SQL("")
     changed = conn.execute(
@@ -559,8 +559,11 @@ def _update_geometry_row_from_rows(conn: Conn, geoid: int, cell_table: str) -> i
     if stored_in_chunks(conn, "vrtx") and stored_in_chunks(conn, cell_table):
         with conn.cursor(binary=True) as cursor:
             extent = cursor.execute(
-                sql.SQL("SELECT e.nvrtx, {corners}, e.ncell FROM tgsis.static_extent(%s) AS e").format(
-                    corners=box_corners(conn, sql.SQL("e.bbox"))
+                sql.SQL("SELECT e.nvrtx, {coordinates}, e.ncell FROM tgsis.static_extent(%s) AS e").format(
+                    coordinates=sql.SQL(", ").join(  # as measured: (0, 0, 0),(NaN, 1, 1) keeps its low x
+                        sql.SQL("{}(e.bbox, {})").format(cube_name(conn, "cube_coord"), sql.Literal(d))
+                        for d in range(1, 7)
+                    )
                 ),
                 (geoid,),
             ).fetchone()
