@@ -265,3 +265,29 @@ def test_a_gmap_class_is_refused_by_name(conn: Conn) -> None:
     state, message = sqlstate(conn, "SELECT tgsis.store_class_in_chunks('cells')")
     assert state == "TG100" and "GMAP" in message
     assert not _in_chunks(conn, "cells")
+
+
+@pytest.mark.parametrize("model", ["INSTANTS", "EVOLVING"])
+def test_dropping_the_last_property_of_a_temporal_class_in_chunks_leaves_rows(conn: Conn, model: str) -> None:
+    """The time keys are no property column: the last property's drop takes the class back to rows first."""
+    _twins(conn, model)
+    data = (
+        series(np.random.default_rng(8), [0.0, 1.0], with_properties=True)
+        if model == "INSTANTS"
+        else evolving(np.random.default_rng(3), [0.0], instants_per_period=3, with_properties=True)
+    )
+    ids = {name: tgsis.insert_feature(conn, name, data, drop_extra_properties=True) for name in ("onrows", "inchunks")}
+    conn.commit()
+    for name in ("onrows", "inchunks"):
+        tgsis.drop_property(conn, name, "porosity", force=True)
+        conn.commit()
+    assert not _in_chunks(conn, "inchunks")
+    keys = ", ".join(_keys(model))
+    rows = [
+        conn.execute(
+            f"SELECT {keys}, _idx FROM {name}_cellpros WHERE _geoid = %s ORDER BY 1, 2", (ids[name],)
+        ).fetchall()
+        for name in ("onrows", "inchunks")
+    ]
+    assert rows[0] == rows[1] and rows[0]
+    conn.commit()

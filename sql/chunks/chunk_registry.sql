@@ -46,4 +46,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.chunk_registry(text) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.chunk_registry(text) IS
-    'what the chunk layer knows of a table: a model table named bare (tgsis.model_tables: chunkcolumn, chunkrefs, chunksize; schema tgsis) or a property table of a STATIC, INSTANTS or EVOLVING feature class (its cellprotable, or its otherprotable of the other alignment; a temporal class's keyed by its instants too) named schema-qualified as format(''%I.%I'') quotes it (tgsis.catalog: chunked by _idx with the chunk size of the table it is aligned with, keyed by _geoid, classname set); no row for any other table';
+    'what the chunk layer knows of a table: a model table named bare (tgsis.model_tables: chunkcolumn, chunkrefs, chunksize; schema tgsis) or a property table of a STATIC, INSTANTS or EVOLVING feature class (its cellprotable, or its otherprotable of the other alignment; a temporal class''s keyed by its instants too) named schema-qualified as format(''%I.%I'') quotes it (tgsis.catalog: chunked by _idx with the chunk size of the table it is aligned with, keyed by _geoid, classname set); no row for any other table';

@@ -77,7 +77,8 @@ BEGIN
      WHERE t IS NOT NULL AND to_regclass(tgsis.chunk_relation(format('%I.%I', v_class.schemaname, t), '_chunk')) IS NULL
        AND EXISTS (SELECT FROM pg_attribute a
                     WHERE a.attrelid = tgsis.storage_table(v_class.schemaname, t)::regclass AND a.attnum > 0
-                      AND NOT a.attisdropped AND a.attname NOT IN ('_geoid', '_idx', 'revision', 'lastrevs', 'revclosed'));
+                      AND NOT a.attisdropped
+                      AND a.attname NOT IN ('_geoid', '_idx', '_times', '_timem', '_timet', 'revision', 'lastrevs', 'revclosed'));
     IF cardinality(v_tables) = 0
        AND to_regclass(tgsis.chunk_relation(format('%I.%I', v_class.schemaname, v_class.cellprotable), '_chunk')) IS NULL
        AND (v_class.otherprotable IS NULL
@@ -213,4 +214,4 @@ REVOKE ALL ON FUNCTION tgsis.store_class_in_chunks(text) FROM PUBLIC;
 GRANT EXECUTE ON FUNCTION tgsis.store_class_in_chunks(text) TO tgsis_admin;
 
 COMMENT ON FUNCTION tgsis.store_class_in_chunks(text) IS
-    'store the property tables of a STATIC, INSTANTS or EVOLVING class in chunks (tgsis_admin members; a temporal class's chunks keyed by its instants too), versioned or not: <schema>.<class>_cellpros and, when the class has one, its table of properties of the other alignment (otherprotable), in one transaction, every refusal checked before anything moves; each as <table>_chunk filled from the rows (every row version when versioned) and verified (tgsis.rows_to_chunks), the row definition kept as <table>_shape, <table> made the face over the chunks (today''s columns and grants; INSERT, UPDATE, DELETE through it), a versioned class keeping its registrations with the chunk tables as their storage (guarded as <table>_ver was); TG100 for a class of a G-map model, TG201 when stored in chunks already, TG202 when a table has row-level security, policies, a user''s trigger or a view or foreign key over it; returns the chunk versions written; tgsis.store_class_in_rows goes back';
+    'store the property tables of a STATIC, INSTANTS or EVOLVING class in chunks (tgsis_admin members; a temporal class''s chunks keyed by its instants too), versioned or not: <schema>.<class>_cellpros and, when the class has one, its table of properties of the other alignment (otherprotable), in one transaction, every refusal checked before anything moves; each as <table>_chunk filled from the rows (every row version when versioned) and verified (tgsis.rows_to_chunks), the row definition kept as <table>_shape, <table> made the face over the chunks (today''s columns and grants; INSERT, UPDATE, DELETE through it), a versioned class keeping its registrations with the chunk tables as their storage (guarded as <table>_ver was); TG100 for a class of a G-map model, TG201 when stored in chunks already, TG202 when a table has row-level security, policies, a user''s trigger or a view or foreign key over it; returns the chunk versions written; tgsis.store_class_in_rows goes back';
