@@ -291,3 +291,38 @@ def test_dropping_the_last_property_of_a_temporal_class_in_chunks_leaves_rows(co
     ]
     assert rows[0] == rows[1] and rows[0]
     conn.commit()
+
+
+def test_the_psql_merge_by_slice_writes_the_property_chunks(conn: Conn) -> None:
+    """An instant added on one side and values changed on the other: ``merge_version`` merges the object slice by
+    slice (tgsis.merge_instants_by_slice), whose writer (tgsis.merge_write_keyed_rows) wrote ``<table>_ver``."""
+    _twins(conn, "INSTANTS")
+    tgsis.enable_feature_versioning(conn)
+    data = _big_series()
+    ids = {name: tgsis.insert_feature(conn, name, data) for name in ("onrows", "inchunks")}
+    tgsis.create_version(conn, "child")
+    conn.commit()
+    for name in ("onrows", "inchunks"):
+        tgsis.add_instant(conn, name, ids[name], 4.0, data.surfaces[1], {"throw": 4.0})
+        conn.commit()
+        with tgsis.in_version(conn, "child"):
+            conn.execute(
+                sql.SQL(
+                    "UPDATE {} SET porosity = porosity + 1 WHERE _geoid = %s AND _times = 1.0 AND _idx > 1000"
+                ).format(sql.Identifier(f"{name}_cellpros")),
+                (ids[name],),
+            )
+        conn.commit()
+    for version in ("DEFAULT", "child"):
+        with tgsis.in_version(conn, version):
+            assert _table(conn, "onrows", "INSTANTS") == _table(conn, "inchunks", "INSTANTS")
+    conn.commit()
+    conn.execute("SELECT tgsis.merge_version('child')")
+    conn.commit()
+    for version in ("DEFAULT", "child"):
+        with tgsis.in_version(conn, version):
+            assert _table(conn, "onrows", "INSTANTS") == _table(conn, "inchunks", "INSTANTS")
+    conn.commit()
+    times = [0.0, 1.0, 2.5, 4.0]
+    assert _snapshots(conn, ids["onrows"], times) == _snapshots(conn, ids["inchunks"], times)
+    conn.commit()
