@@ -326,3 +326,33 @@ def test_the_psql_merge_by_slice_writes_the_property_chunks(conn: Conn) -> None:
     times = [0.0, 1.0, 2.5, 4.0]
     assert _snapshots(conn, ids["onrows"], times) == _snapshots(conn, ids["inchunks"], times)
     conn.commit()
+
+
+@pytest.mark.parametrize("model", ["STATIC", "INSTANTS"])
+def test_a_class_written_through_its_face_is_dropped_in_the_same_transaction(conn: Conn, model: str) -> None:
+    """The face's work tables of the session (typed by the face's row type) kept DROP VIEW of the face from running
+    in the transaction that wrote through it (2BP01)."""
+    tgsis.create_feature_class(
+        conn,
+        "gone",
+        "SURFACE",
+        time_model=model,  # type: ignore[arg-type]
+        cell_properties=[("porosity", "float8")],
+        instant_properties=[("throw", "float8")] if model == "INSTANTS" else None,
+    )
+    conn.execute("SELECT tgsis.store_class_in_chunks('gone')")
+    conn.commit()
+    if model == "INSTANTS":
+        data: Any = series(np.random.default_rng(8), [0.0, 1.0], with_properties=True)
+        geoid = tgsis.insert_feature(conn, "gone", data, drop_extra_properties=True)
+    else:
+        geoid = tgsis.insert_feature(
+            conn,
+            "gone",
+            Surface([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], vertex_properties={"porosity": [0.1, 0.2, 0.3]}),
+        )
+        conn.commit()
+        conn.execute("UPDATE gone_cellpros SET porosity = 0.5 WHERE _geoid = %s AND _idx = 1", (geoid,))
+    assert tgsis.drop_feature_class(conn, "gone", force=True) == 1
+    conn.commit()
+    assert conn.execute("SELECT to_regclass('public.gone_cellpros_chunk')").fetchone() == (None,)
