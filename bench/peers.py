@@ -37,8 +37,21 @@ the flip of a static class's default makes it) or as rows
 made in chunks). The upload and download then move the property's chunks
 whole (docs/storage.md, "The bulk paths of property chunks").
 
+``--edit`` (with ``--versioned`` and ``--repeat 1``: a repetition's
+upload deletes the object before, and on versioned storage the closed
+versions stay) adds the versioned disk figure: after the timed runs, the
+1 % spatially local edit of ``bench/checkin.py --bytes`` (``region``: a
+square of 1 % of the vertices moved, their porosity changed, the diagonals
+of its quads flipped) is checked in as a new version (a child of DEFAULT);
+the storage is then measured holding both versions of the object
+(``bytes_per_vertex_before_edit``, ``bytes_per_vertex``,
+``storage_vs_tin``).
+
     python bench/peers.py [--side 1000] [--repeat 3] [--versioned] [--storage chunks|rows]
-        [--property-storage chunks|rows]
+        [--property-storage chunks|rows] [--edit] [--order file|spatial]
+
+``--order spatial`` uploads the surface renumbered by ``tgsis.mesh.spatial_order``
+(``insert_feature(..., order="spatial")``): a local edit then touches few chunks.
 """
 
 from __future__ import annotations
@@ -49,6 +62,7 @@ from typing import Any
 
 import numpy as np
 import psycopg
+from checkin import local_edit, same_grid_surface
 from timing import paired
 from transfer import grid_surface
 
@@ -58,6 +72,7 @@ from tgsis.db import features as F
 from tgsis.db import versions as V
 from tgsis.db.copy import encode_rows
 from tgsis.db.local import LocalServer, find_binaries
+from tgsis.mesh import spatial_order
 from tgsis.postgis import mesh_from_wkb, mesh_to_ewkb
 
 
@@ -85,7 +100,15 @@ def main() -> None:
         default="chunks",
         help="the class's property table: chunks (store_class_in_chunks) or rows",
     )
+    parser.add_argument(
+        "--edit",
+        action="store_true",
+        help="versioned disk figure: a 1 %% local edit checked in as a new version before the sizes",
+    )
+    parser.add_argument("--order", choices=("file", "spatial"), default="file", help="insert_feature's order")
     args = parser.parse_args()
+    if args.edit and (not args.versioned or args.repeat != 1):
+        parser.error("--edit measures one object's two versions: give --versioned and --repeat 1")
 
     surface = grid_surface(args.side)
     n, m = surface.n_vertices, surface.n_cells
@@ -171,7 +194,7 @@ def main() -> None:
             if args.versioned and "geoid" in state:
                 F.delete_feature(conn, "horizon", state["geoid"])
             conn.commit()
-            state["geoid"] = F.insert_feature(conn, "horizon", surface)
+            state["geoid"] = F.insert_feature(conn, "horizon", surface, order=args.order)
             conn.commit()
 
         def postgis_up() -> None:
@@ -221,13 +244,14 @@ def main() -> None:
             conn.commit()
 
         downs = paired([tgsis_down, tgsis_checkout, postgis_down, bytea_down], args.repeat)
-        assert fetched["tgsis"].same_as(surface), "tgsis: downloaded surface differs from the uploaded one"
-        assert fetched["checkout"].same_as(surface), "checkout: surface differs from the uploaded one"
+        stored_as = spatial_order(surface) if args.order == "spatial" else surface  # the stored ids' order
+        assert fetched["tgsis"].same_as(stored_as), "tgsis: downloaded surface differs from the uploaded one"
+        assert fetched["checkout"].same_as(stored_as), "checkout: surface differs from the uploaded one"
         assert np.array_equal(fetched["bytea"].vertices, surface.vertices)
         assert fetched["postgis"].n_cells == m, "PostGIS: triangle count differs"
         # one vertex by key, as a psql user asks it of the view, and through tgsis.vertex (warm, medians)
         probe = int(n // 2 + 17)
-        expected = tuple(float(c) for c in surface.vertices[probe])
+        expected = tuple(float(c) for c in stored_as.vertices[probe])
 
         def by_view() -> None:
             row = conn.execute(
@@ -242,6 +266,24 @@ def main() -> None:
             conn.commit()
 
         keyed = paired([by_view, by_function], max(args.repeat, 5))
+        before_edit: dict[str, tuple[int, int]] = {}
+        if args.edit:
+            conn.autocommit = True
+            conn.execute("VACUUM")
+            conn.autocommit = False
+            before_edit = sizes(conn, tables)
+            conn.commit()
+            tgsis.create_version(conn, "edit")
+            conn.commit()
+            with tgsis.in_version(conn, "edit"):
+                co = C.checkout(conn, state["geoid"], "horizon")
+                assert co.mesh is not None
+                edited = local_edit(co.mesh, args.side, "region")
+                tgsis.checkin(conn, co, edited)
+                conn.commit()
+                stored_edit = F.fetch_feature(conn, "horizon", state["geoid"]).mesh
+            assert isinstance(stored_edit, tgsis.Mesh) and same_grid_surface(stored_edit, edited, args.side)
+            conn.commit()
         # what narrower rows would store: int4 local ids, columns ordered for alignment (same keys)
         conn.execute("CREATE TABLE narrow_vrtx AS SELECT geoid, x, y, z, vrtxid::int4 AS vrtxid FROM tgsis.vrtx")
         conn.execute(
@@ -300,8 +342,18 @@ def main() -> None:
     print(f"bytes_per_vertex: {tgsis_bytes / n:.1f}")
     print(f"bytes_per_vertex_without_property: {sum(stored[t][0] for t in tables[:2]) / n:.1f}")
     print(f"property_storage: {args.property_storage}")
+    print(f"order: {args.order}")
     print(f"property_bytes_per_vertex: {stored[tables[2]][0] / n:.1f}")
     print(f"upload_vs_bytea: {ups[0] / ups[2]:.2f}")
+    if before_edit:
+        whole = sum(before_edit[t][0] for t in tables)
+        print(f"bytes_per_vertex_before_edit: {whole / n:.1f}")
+        print(f"storage_vs_tin_before_edit: {whole / stored['tin_peer'][0]:.2f}")
+        print(f"edit_growth_share_pct: {100 * (tgsis_bytes - whole) / whole:.2f}")
+        for table in tables:
+            print(
+                f"{table:24s} {before_edit[table][0] / 1e6:8.1f} MB before the edit, {stored[table][0] / 1e6:8.1f} after"
+            )
 
 
 if __name__ == "__main__":

@@ -115,15 +115,20 @@ def _storage(conn: Conn, table: str) -> str:
 # --------------------------------------------------------------------------- the layout and the round trip
 
 
-def test_the_registry_knows_static_property_tables_and_nothing_else(conn: Conn) -> None:
+def test_the_registry_knows_property_tables_of_models_1_to_3_and_nothing_else(conn: Conn) -> None:
     _rock(conn)
     tgsis.create_feature_class(conn, "series", "SURFACE", time_model="INSTANTS", cell_properties=[("t", "real")])
+    tgsis.create_feature_class(conn, "cells", "GMAP", time_model="GMAP", cell_properties=[("t", "real")], cell_level=0)
     assert conn.execute("SELECT * FROM tgsis.chunk_registry(%s)", (ROCK,)).fetchall() == [
         ("public", "rock_cellpros", "_geoid", "_idx", [], 1024, "rock")
     ]
     assert conn.execute("SELECT count(*) FROM tgsis.chunk_registry('vrtx')").fetchone() == (1,)
-    # a temporal class's table (its time keys are not built), the feature table, an unquoted name: not registered
-    for name in ("public.series_cellpros", "public.rock", "rock_cellpros", "public.nothere"):
+    # an INSTANTS or EVOLVING class's table is registered (plan O area C), keyed by its instants too
+    assert conn.execute("SELECT * FROM tgsis.chunk_registry('public.series_cellpros')").fetchall() == [
+        ("public", "series_cellpros", "_geoid", "_idx", [], 1024, "series")
+    ]
+    # a G-map model's class table, the feature table, an unquoted name: not registered
+    for name in ("public.cells_cellpros", "public.rock", "rock_cellpros", "public.nothere"):
         state, message = sqlstate(conn, "SELECT tgsis.create_chunk_table(%s)", (name,))
         assert state == "TG200" and "not registered for chunks" in message, (name, message)
     roles = conn.execute(
@@ -430,8 +435,8 @@ def test_what_is_not_built_is_refused_by_name_and_changes_nothing(conn: Conn) ->
     )
     assert _layer_rows(conn) == before
     assert sqlstate(conn, "SELECT tgsis.store_class_in_chunks('nothere')")[0] == "TG200"
-    tgsis.create_feature_class(conn, "series", "SURFACE", time_model="INSTANTS", cell_properties=[("t", "real")])
-    assert sqlstate(conn, "SELECT tgsis.store_class_in_chunks('series')")[0] == "TG100"
+    tgsis.create_feature_class(conn, "cells", "GMAP", time_model="GMAP", cell_properties=[("t", "real")], cell_level=0)
+    assert sqlstate(conn, "SELECT tgsis.store_class_in_chunks('cells')")[0] == "TG100"
     # (a vector property is stored in chunks since plan K: tests/test_vector_property_chunks.py)
     tgsis.create_feature_class(conn, "bare", "SURFACE")  # no vertex or cell property: nothing to chunk
     state, message = sqlstate(conn, "SELECT tgsis.store_class_in_chunks('bare')")

@@ -5,7 +5,7 @@
 -- (the contract: docs/storage.md, "Chunks and the mapping of ids" and
 -- "Property chunks: the contract"). Read from the registry
 -- (tgsis.chunk_registry: a model table's row of tgsis.model_tables, or a
--- STATIC class's property table from tgsis.catalog) and from the live
+-- STATIC, INSTANTS or EVOLVING class's property table from tgsis.catalog) and from the live
 -- definition of the row table (pg_attribute of what tgsis.row_shape names:
 -- the table, or <table>_ver once versioned, whose versioning columns are left
 -- out, or the shape table once stored in chunks), never from a list typed
@@ -57,7 +57,7 @@ BEGIN
                              ELSE p_table END
             USING ERRCODE = 'TG200',
                   DETAIL = CASE WHEN FOUND THEN 'Its row in tgsis.model_tables has no chunkcolumn: it is stored as rows.'
-                                ELSE 'No row of tgsis.model_tables names it, nor is it the property table of a STATIC class '
+                                ELSE 'No row of tgsis.model_tables names it, nor is it the property table of a STATIC, INSTANTS or EVOLVING class '
                                      '(named schema.table) in tgsis.catalog.' END,
                   HINT = 'only the vertex and simplex tables registered with a chunk column have chunk tables';
     END IF;
@@ -215,4 +215,4 @@ $$;
 REVOKE ALL ON FUNCTION tgsis.chunk_columns(text) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.chunk_columns(text) IS
-    'the columns of a table of tgsis.chunk_registry (a model table registered for chunks, or a STATIC class''s property table named schema.table), from its live storage, in column order, each with its role in the chunk table: key, chunk (the local id), float (double precision[]), ref (integer[] relative to vbase, and <name>_wide) or value (a property, or a model table''s other scalar column: an array of its type, NULL elements allowed) or vector (a class''s vector property of size k: a 2-D array, slots x k, typename its element type, size k) or point (a model table''s double precision[]: a 2-D array, slots x m, m per chunk, size NULL), and its type; TG200 for a table not registered for chunks, TG100 for a column the layout has no form for';
+    'the columns of a table of tgsis.chunk_registry (a model table registered for chunks, or the property table of a STATIC, INSTANTS or EVOLVING class named schema.table), from its live storage, in column order, each with its role in the chunk table: key, chunk (the local id), float (double precision[]), ref (integer[] relative to vbase, and <name>_wide) or value (a property, or a model table''s other scalar column: an array of its type, NULL elements allowed) or vector (a class''s vector property of size k: a 2-D array, slots x k, typename its element type, size k) or point (a model table''s double precision[]: a 2-D array, slots x m, m per chunk, size NULL), and its type; TG200 for a table not registered for chunks, TG100 for a column the layout has no form for';

@@ -4,7 +4,8 @@
 -- its row of tgsis.model_tables with chunkcolumn, chunkrefs, chunksize); a
 -- feature class's property table is named schema-qualified and quoted as
 -- format('%I.%I') gives it ('public.rock_cellpros'), and is known from
--- tgsis.catalog (the cellprotable of a STATIC class, or its otherprotable:
+-- tgsis.catalog (the cellprotable of a STATIC, INSTANTS or EVOLVING class, or
+-- its otherprotable (STATIC only):
 -- the properties of the other alignment): chunked by _idx, keyed by _geoid,
 -- no vertex-id columns, with the chunk size of the table its properties are
 -- aligned with (vrtx for VERTEX, the geotype's simplex table for CELL; for
@@ -38,11 +39,11 @@ BEGIN
                                 (c.otherprotable, CASE WHEN c.proalignment = 'VERTEX' THEN 'CELL' ELSE 'VERTEX' END))
                      AS t(tablename, alignment)
      WHERE strpos(p_table, '.') > 0  -- (a model table's bare name reads no row of the catalog)
-       AND t.tablename IS NOT NULL AND format('%I.%I', c.schemaname, t.tablename) = p_table AND c.timemodel = 'STATIC';
+       AND t.tablename IS NOT NULL AND format('%I.%I', c.schemaname, t.tablename) = p_table AND c.timemodel IN ('STATIC', 'INSTANTS', 'EVOLVING');
 END
 $$;
 
 REVOKE ALL ON FUNCTION tgsis.chunk_registry(text) FROM PUBLIC;
 
 COMMENT ON FUNCTION tgsis.chunk_registry(text) IS
-    'what the chunk layer knows of a table: a model table named bare (tgsis.model_tables: chunkcolumn, chunkrefs, chunksize; schema tgsis) or a property table of a STATIC feature class (its cellprotable, or its otherprotable of the other alignment) named schema-qualified as format(''%I.%I'') quotes it (tgsis.catalog: chunked by _idx with the chunk size of the table it is aligned with, keyed by _geoid, classname set); no row for any other table';
+    'what the chunk layer knows of a table: a model table named bare (tgsis.model_tables: chunkcolumn, chunkrefs, chunksize; schema tgsis) or a property table of a STATIC, INSTANTS or EVOLVING feature class (its cellprotable, or its otherprotable of the other alignment; a temporal class''s keyed by its instants too) named schema-qualified as format(''%I.%I'') quotes it (tgsis.catalog: chunked by _idx with the chunk size of the table it is aligned with, keyed by _geoid, classname set); no row for any other table';

@@ -54,7 +54,11 @@ BEGIN
     FOR v_table IN SELECT t.tablename FROM tgsis.class_tables t WHERE t.classname = p_name ORDER BY t.position DESC LOOP
         IF tgsis.stored_in_chunks(v_class.schemaname, v_table) THEN
             -- stored in chunks (tgsis.store_class_in_chunks), versioned or not: the face, the decoded view, the
-            -- chunks, the row definition, and a versioned table's registration
+            -- chunks, the row definition, and a versioned table's registration; first the session's work tables of
+            -- writes through the face in this transaction (tgsis.chunk_face_work: typed by the face's row type,
+            -- dropped at the commit, they would keep the face from being dropped: 2BP01)
+            EXECUTE (SELECT format('DROP TABLE IF EXISTS %s', string_agg(tgsis.chunk_face_work(format('%I.%I', v_class.schemaname, v_table), k), ', '))
+                       FROM unnest(ARRAY['rows', 'dels', 'queue', 'now']) AS k);
             EXECUTE format('DROP VIEW %I.%I', v_class.schemaname, v_table);
             EXECUTE format('DROP FUNCTION IF EXISTS %I.%I()', v_class.schemaname, v_table || '_face_row');
             EXECUTE format('DROP VIEW %I.%I', v_class.schemaname, v_table || '_chunk_rows');

@@ -49,7 +49,7 @@ BEGIN
        AND NOT EXISTS (SELECT FROM pg_attribute a
                         WHERE a.attrelid = to_regclass(tgsis.chunk_relation(format('%I.%I', v_class.schemaname, v_prop.tablename), '_shape'))
                           AND a.attnum > 0 AND NOT a.attisdropped AND a.attname <> p_name
-                          AND a.attname NOT IN ('_geoid', '_idx')) THEN
+                          AND a.attname NOT IN ('_geoid', '_idx', '_times', '_timem', '_timet')) THEN
         BEGIN
             PERFORM tgsis.store_class_in_rows(p_class);
         EXCEPTION WHEN dependent_objects_still_exist THEN  -- a user's view over the face: refused as on rows
@@ -71,7 +71,8 @@ BEGIN
     IF v_rechunk AND EXISTS (SELECT FROM unnest(ARRAY[v_class.cellprotable, v_class.otherprotable]) AS u(t)
                               JOIN pg_attribute a ON a.attrelid = to_regclass(format('%I.%I', v_class.schemaname, t))
                              WHERE t IS NOT NULL AND a.attnum > 0 AND NOT a.attisdropped
-                               AND a.attname NOT IN ('_geoid', '_idx', 'revision', 'lastrevs', 'revclosed')) THEN
+                               AND a.attname NOT IN ('_geoid', '_idx', '_times', '_timem', '_timet', 'revision',
+                                                     'lastrevs', 'revclosed')) THEN
         PERFORM tgsis.store_class_in_chunks(p_class);
     END IF;
     RETURN v_row;

@@ -1,4 +1,4 @@
--- tgsis.store_class_in_chunks(class): store a STATIC class's property tables in chunks behind faces with today's names (opt-in, issue 40).
+-- tgsis.store_class_in_chunks(class): store a class's property tables (models 1 to 3) in chunks behind faces with today's names (issue 40).
 -- docs/storage.md, "Property chunks: the contract": <schema>.<class>_cellpros
 -- (and the class's table of properties of the other alignment, otherprotable,
 -- e.g. <class>_simplexpros: both in one transaction, every refusal of either
@@ -34,7 +34,10 @@
 -- foreign key over it is refused by name (TG202): a view can carry none of
 -- them, and dropping the rows would lose them without an error.
 -- SECURITY DEFINER: the class's tables belong to tgsis's owner. Returns the
--- chunk versions written.
+-- chunk versions written. A temporal class (INSTANTS: <class>_cellpros keyed
+-- _geoid, _times, _idx; EVOLVING: _geoid, _timem, _timet, _idx) is switched
+-- the same way, its chunks keyed by its instants too (plan O area C); the
+-- G-map models' classes are refused (TG100).
 CREATE FUNCTION tgsis.store_class_in_chunks(p_class text)
 RETURNS bigint
 LANGUAGE plpgsql
@@ -59,11 +62,11 @@ DECLARE
     v_proc      text;
 BEGIN
     v_class := tgsis.class_for_change(p_class, 'store in chunks the');  -- TG002 (not a tgsis_admin), TG200
-    IF v_class.timemodel <> 'STATIC' THEN
+    IF v_class.timemodel NOT IN ('STATIC', 'INSTANTS', 'EVOLVING') THEN
         RAISE EXCEPTION 'the properties of feature class % cannot be stored in chunks yet: it is of time model %', p_class,
                         v_class.timemodel
             USING ERRCODE = 'TG100',
-                  DETAIL = 'Property chunks are built for STATIC classes (model 1); temporal classes keep their properties as rows.';
+                  DETAIL = 'Property chunks are built for STATIC, INSTANTS and EVOLVING classes (models 1 to 3); the G-map models keep their properties as rows.';
     END IF;
     -- both property tables (the class's alignment and, when it has one, the other's); one already in chunks (switched
     -- by a tgsis that knew only cellprotable) is left as it is;
@@ -74,7 +77,8 @@ BEGIN
      WHERE t IS NOT NULL AND to_regclass(tgsis.chunk_relation(format('%I.%I', v_class.schemaname, t), '_chunk')) IS NULL
        AND EXISTS (SELECT FROM pg_attribute a
                     WHERE a.attrelid = tgsis.storage_table(v_class.schemaname, t)::regclass AND a.attnum > 0
-                      AND NOT a.attisdropped AND a.attname NOT IN ('_geoid', '_idx', 'revision', 'lastrevs', 'revclosed'));
+                      AND NOT a.attisdropped
+                      AND a.attname NOT IN ('_geoid', '_idx', '_times', '_timem', '_timet', 'revision', 'lastrevs', 'revclosed'));
     IF cardinality(v_tables) = 0
        AND to_regclass(tgsis.chunk_relation(format('%I.%I', v_class.schemaname, v_class.cellprotable), '_chunk')) IS NULL
        AND (v_class.otherprotable IS NULL
@@ -212,4 +216,4 @@ REVOKE ALL ON FUNCTION tgsis.store_class_in_chunks(text) FROM PUBLIC;
 GRANT EXECUTE ON FUNCTION tgsis.store_class_in_chunks(text) TO tgsis_admin;
 
 COMMENT ON FUNCTION tgsis.store_class_in_chunks(text) IS
-    'store the property tables of a STATIC class in chunks (opt-in, tgsis_admin members), versioned or not: <schema>.<class>_cellpros and, when the class has one, its table of properties of the other alignment (otherprotable), in one transaction, every refusal checked before anything moves; each as <table>_chunk filled from the rows (every row version when versioned) and verified (tgsis.rows_to_chunks), the row definition kept as <table>_shape, <table> made the face over the chunks (today''s columns and grants; INSERT, UPDATE, DELETE through it), a versioned class keeping its registrations with the chunk tables as their storage (guarded as <table>_ver was); TG100 for a temporal one, TG201 when stored in chunks already, TG202 when a table has row-level security, policies, a user''s trigger or a view or foreign key over it; returns the chunk versions written; tgsis.store_class_in_rows goes back';
+    'store the property tables of a STATIC, INSTANTS or EVOLVING class in chunks (tgsis_admin members; a temporal class''s chunks keyed by its instants too), versioned or not: <schema>.<class>_cellpros and, when the class has one, its table of properties of the other alignment (otherprotable), in one transaction, every refusal checked before anything moves; each as <table>_chunk filled from the rows (every row version when versioned) and verified (tgsis.rows_to_chunks), the row definition kept as <table>_shape, <table> made the face over the chunks (today''s columns and grants; INSERT, UPDATE, DELETE through it), a versioned class keeping its registrations with the chunk tables as their storage (guarded as <table>_ver was); TG100 for a class of a G-map model, TG201 when stored in chunks already, TG202 when a table has row-level security, policies, a user''s trigger or a view or foreign key over it; returns the chunk versions written; tgsis.store_class_in_rows goes back';

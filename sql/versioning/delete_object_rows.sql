@@ -11,7 +11,8 @@
 -- rewrites their chunks in the working revision with the caller's rights;
 -- whole objects while unversioned by tgsis.write_property_rows, each
 -- object's rows at once (the face's checks for the set, each touched chunk
--- written once). Returns rows affected.
+-- written once; a temporal class's, keyed by instants too, through its
+-- face). Returns rows affected.
 CREATE FUNCTION tgsis.delete_object_rows(p_schema text, p_table text, p_keyfield text, p_keys bigint[],
                                          p_idfield text DEFAULT NULL, p_ids bigint[] DEFAULT NULL)
 RETURNS bigint
@@ -43,8 +44,12 @@ BEGIN
     -- caller's rights); whole objects while it is not versioned go by the chunk writer, each object's rows at
     -- once (tgsis.write_property_rows: the face's checks for the set, each chunk written once, not a trigger call
     -- per row); while versioned they are closed as chunk versions (tgsis.close_object_rows)
+    -- (a temporal class's property table, keyed by its instants too, goes through its face: its trigger writes each
+    -- touched chunk once at the statement's end)
     IF p_schema <> 'tgsis' AND p_idfield IS NULL AND tgsis.stored_in_chunks(p_schema, p_table)
-       AND NOT EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = p_schema AND tablename = p_table) THEN
+       AND NOT EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = p_schema AND tablename = p_table)
+       AND EXISTS (SELECT FROM tgsis.catalog c WHERE c.schemaname = p_schema AND c.timemodel = 'STATIC'
+                      AND p_table IN (c.cellprotable, c.otherprotable)) THEN
         v_deleted := 0;
         FOR v_key IN SELECT DISTINCT k FROM unnest(p_keys) AS k WHERE k IS NOT NULL ORDER BY 1 LOOP
             -- (a class's property table is keyed (_geoid, _idx))
@@ -59,7 +64,9 @@ BEGIN
         END LOOP;
         RETURN v_deleted;
     END IF;
-    IF p_schema <> 'tgsis' AND p_idfield IS NOT NULL AND tgsis.stored_in_chunks(p_schema, p_table) THEN
+    IF p_schema <> 'tgsis' AND tgsis.stored_in_chunks(p_schema, p_table)
+       AND (p_idfield IS NOT NULL
+            OR NOT EXISTS (SELECT FROM tgsis.versioned_tables WHERE schemaname = p_schema AND tablename = p_table)) THEN
         EXECUTE format('DELETE FROM %I.%I WHERE %s', p_schema, p_table, v_where)
           USING p_keys, NULL::integer, NULL::integer[], p_ids;
         GET DIAGNOSTICS v_deleted = ROW_COUNT;

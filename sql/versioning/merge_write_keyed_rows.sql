@@ -38,6 +38,9 @@ DECLARE
     v_written bigint := 0;
     v_tab     text;
     v_shape   text;
+    -- the table as the chunk layer names it (tgsis.chunk_registry): a model table bare, a class's schema-qualified
+    v_name    text := CASE WHEN p_table.schemaname = 'tgsis' THEN p_table.tablename
+                           ELSE format('%I.%I', p_table.schemaname, p_table.tablename) END;
 BEGIN
     -- the keys of $1 (its first element the object) as a relation k (k1, ..., kn) of the columns' types
     SELECT format('(SELECT DISTINCT %s FROM generate_series(0, (cardinality($1) - 1) / %s - 1) AS g(i)) AS k',
@@ -47,8 +50,8 @@ BEGIN
       INTO v_keyset, v_on
       FROM unnest(p_keys) WITH ORDINALITY AS u(c, o)
       JOIN pg_catalog.pg_attribute a ON a.attrelid = v_rel AND a.attname = u.c AND NOT a.attisdropped;
-    IF p_table.schemaname = 'tgsis' AND tgsis.stored_in_chunks(p_table.tablename) THEN
-        -- stored in chunks (model 2's time tables): the same rights asked, then the keys that go (those not written
+    IF tgsis.stored_in_chunks(p_table.schemaname, p_table.tablename) THEN
+        -- stored in chunks (model 2's time tables, a temporal class's property table): the same rights asked, then the keys that go (those not written
         -- again) and the rows written as one set by the writer of chunk contents, in the session's working
         -- revision (the version's: the caller put the session there), each touched chunk once
         IF cardinality(p_gone) > 0 THEN
@@ -71,9 +74,10 @@ BEGIN
                  WHERE a.attrelid = v_rel AND a.attnum > 0 AND NOT a.attisdropped AND a.attname <> p_okey) AS c;
         -- (one table of the session's for every object and merge: a table made and dropped per object keeps a lock
         -- until the transaction ends, and a merge of many objects would run out of the shared lock table)
-        v_tab := format('pg_temp.%I', 'tgsis_merge_rows_' || p_table.tablename);
+        v_tab := format('pg_temp.%I', 'tgsis_merge_rows_' || CASE WHEN p_table.schemaname = 'tgsis' THEN p_table.tablename
+                                                                   ELSE left(md5(v_name), 16) END);
         IF to_regclass(v_tab) IS NULL THEN
-            EXECUTE format('SELECT tgsis.%I($1)::text', 'row_shape') INTO v_shape USING p_table.tablename;
+            EXECUTE format('SELECT tgsis.%I($1)::text', 'row_shape') INTO v_shape USING v_name;
             EXECUTE format('CREATE TEMP TABLE %s AS SELECT *, false AS _delete FROM %s WITH NO DATA', v_tab, v_shape);
         ELSIF (SELECT c.relowner FROM pg_class c WHERE c.oid = to_regclass(v_tab))
               <> (SELECT r.oid FROM pg_roles r WHERE r.rolname = current_user) THEN
@@ -99,7 +103,7 @@ BEGIN
               USING ARRAY[p_geoid::text] || p_gone;
             v_written := v_written + cardinality(p_gone) / v_k;
         END IF;
-        EXECUTE format('SELECT tgsis.%I($1, $2)', 'write_chunk_rows') INTO v_count USING p_table.tablename, v_tab::regclass;
+        EXECUTE format('SELECT tgsis.%I($1, $2)', 'write_chunk_rows') INTO v_count USING v_name, v_tab::regclass;
         IF v_count > 0 THEN
             PERFORM tgsis.note_changed_objects(p_table.schemaname, p_table.tablename, p_revision, ARRAY[p_geoid::text]);
         END IF;
