@@ -36,7 +36,7 @@
 -- SECURITY DEFINER: the class's tables belong to tgsis's owner. Returns the
 -- chunk versions written. A temporal class (INSTANTS: <class>_cellpros keyed
 -- _geoid, _times, _idx; EVOLVING: _geoid, _timem, _timet, _idx) is switched
--- the same way, its chunks keyed by its instants too (plan O area C); the
+-- the same way, its chunks keyed by its instants too; the
 -- G-map models' classes are refused (TG100).
 CREATE FUNCTION tgsis.store_class_in_chunks(p_class text)
 RETURNS bigint
