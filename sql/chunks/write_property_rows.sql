@@ -26,7 +26,9 @@
 -- (tgsis.object_write_lock: the face's writers hold it shared, so no face
 -- write of the object is in flight and none starts before the commit), and
 -- the object is noted as changed in the working revision
--- (tgsis.record_changed_objects), as the face notes it. SECURITY DEFINER:
+-- (tgsis.record_changed_objects) when a chunk was written, as
+-- tgsis.swap_object_chunks notes it (an edit that leaves every chunk the same,
+-- such as the delete of an id with no row, notes nothing). SECURITY DEFINER:
 -- the chunk table is written by its owner only. Returns the chunks written.
 CREATE FUNCTION tgsis.write_property_rows(p_table text, p_geoid bigint, p_deleted bigint[], p_rows anyarray)
 RETURNS bigint
@@ -143,7 +145,10 @@ BEGIN
        USING p_geoid, p_deleted;
     v_written := tgsis.write_chunk_rows(p_table, v_tab::regclass);
     EXECUTE format('DROP TABLE %s', v_tab);
-    IF v_w <> 0 THEN
+    -- noted only when a chunk was written, as tgsis.swap_object_chunks (the client's path) notes it: an edit
+    -- that leaves every chunk as it was (a delete of an id that has no row, as a merge's renumbered new vertex
+    -- without properties gives) changes nothing, and the next merge or conflict check has nothing to read there
+    IF v_w <> 0 AND v_written > 0 THEN
         PERFORM tgsis.record_changed_objects(v_reg.schemaname, v_reg.tablename, v_keys);
     END IF;
     RETURN v_written;

@@ -128,8 +128,24 @@ BEGIN
            AS s (tab, schemaname, tablename, okey, tcol, idcol)
       JOIN tgsis.versioned_tables t ON t.schemaname = s.schemaname AND t.tablename = s.tablename;
 
-    -- 1. the keys (instant, id) of the rows some set sees otherwise than another
+    -- 1. the keys (instant, id) of the rows some set sees otherwise than another; the vertices and triangles
+    -- stored in chunks: only the slots of the changed chunks whose values or presence differ between the three
+    -- states (tgsis.storage_changed_rows, as tgsis.mesh_merge_work reads an instant's change), not every slot of
+    -- a changed chunk (whose property rows were then read too: the instant's whole property table)
     FOR v_spec IN SELECT * FROM pg_temp.tgsis_ms_spec LOOP
+        IF v_spec.tab IN ('v', 'c') AND tgsis.stored_in_chunks((v_spec.vt).tablename) THEN
+            INSERT INTO pg_temp.tgsis_ms_key
+            SELECT v_spec.tab, r[1]::float8, r[2]::bigint
+              FROM tgsis.storage_run(v_spec.vt, false, format(
+                     'SELECT DISTINCT ARRAY[v.%1$I::text, v.%2$I::text] FROM %3$s v WHERE v.%4$I = $1[1]::bigint
+                         AND (v.revision = ANY ($2) OR (v.revclosed AND v.lastrevs && $2))',
+                     v_spec.tcol, v_spec.idcol,
+                     tgsis.storage_changed_rows((v_spec.vt).schemaname, (v_spec.vt).tablename, ARRAY[p_geoid],
+                                                v_base, v_pset, v_cset),
+                     v_spec.okey),
+                   p_1 => ARRAY[v_key], p_2 => v_since) AS r;
+            CONTINUE;
+        END IF;
         INSERT INTO pg_temp.tgsis_ms_key
         SELECT v_spec.tab, r[1]::float8, coalesce(r[2]::bigint, 0)
           FROM tgsis.merge_changed_keys(v_spec.vt, v_spec.okey,

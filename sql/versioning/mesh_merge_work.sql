@@ -17,7 +17,8 @@
 -- keys are the same in the three states. Model-1 tables stored in chunks (issue 40) are read
 -- through their decoded chunk versions (tgsis.storage_row_versions); their changed keys are the slots of
 -- the chunks written or closed in those revisions whose values (bit for bit) or presence differ between
--- the three states (tgsis.storage_changed_rows), so the work is sized by the change, as on rows.
+-- the three states (tgsis.storage_changed_rows), so the work is sized by the change, as on rows; so are
+-- model 2's at an instant (since the twenty-first session).
 -- Then, as merge3 does:
 --   * the version's new ids are renumbered (merge3's child renumbering: a new
 --     row with the content of a parent's new row takes its id, pairing the
@@ -104,6 +105,7 @@ DECLARE
     v_vnull   text;
     v_cnull   text;
     v_runs    boolean;
+    v_narrow  boolean;  -- the changed keys from the slots that differ (tgsis.storage_changed_rows)
     v_vkeys   bigint[];
     v_ckeys   bigint[];
     v_top_v   bigint;
@@ -260,19 +262,27 @@ BEGIN
 
 
     -- 1. the keys of the rows some set sees otherwise than another ($2: the revisions that tell the sets apart;
-    -- model 1 stored in chunks: only the slots of the changed chunks whose values or presence differ between
-    -- the three states, tgsis.storage_changed_rows, so that the work is sized by the change, not by its chunks)
+    -- model 1, and model 2's instant (its chunks keyed by instant, tgsis.chunk_key), stored in chunks: only the
+    -- slots of the changed chunks whose values or presence differ between the three states,
+    -- tgsis.storage_changed_rows, so that the work is sized by the change, not by its chunks; model 2's keys
+    -- are those tgsis.merge_instants_by_slice reads, the same way, and the two must agree: the merged rows of
+    -- the one are compared with the version's rows of the other; an instant whose tgsis.times row changed, added
+    -- or removed somewhere, is read whole there, so here every slot of its changed chunks, as before)
+    v_narrow := p_timem IS NULL
+                AND (p_times IS NULL
+                     OR NOT EXISTS (SELECT FROM tgsis.times_ver v WHERE v.geoid = p_geoid AND v.times = p_times
+                                       AND (v.revision = ANY (v_since) OR (v.revclosed AND v.lastrevs && v_since))));
     EXECUTE format('SELECT ARRAY(SELECT v.vrtxid FROM %2$s v WHERE %3$s AND %1$s ' || v_atoms || ')',
                    v_changed,
-                   CASE WHEN p_times IS NULL
-                        THEN tgsis.storage_changed_rows('tgsis', 'vrtx', ARRAY[p_geoid], v_base, v_parent.workingset,
-                                                        v_version.workingset)
+                   CASE WHEN v_narrow
+                        THEN tgsis.storage_changed_rows('tgsis', CASE WHEN p_times IS NULL THEN 'vrtx' ELSE 'times_vrtx' END,
+                                                        ARRAY[p_geoid], v_base, v_parent.workingset, v_version.workingset)
                         ELSE v_vsrc END,
                    v_obj)
        INTO v_vkeys USING p_geoid, v_since;
     EXECUTE format('SELECT ARRAY(SELECT v.%1$I FROM %2$s v WHERE %4$s AND %3$s)',
                    v_cellid,
-                   CASE WHEN p_times IS NULL
+                   CASE WHEN v_narrow
                         THEN tgsis.storage_changed_rows('tgsis', v_table, ARRAY[p_geoid], v_base, v_parent.workingset,
                                                         v_version.workingset)
                         ELSE v_csrc END,
