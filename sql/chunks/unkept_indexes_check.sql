@@ -15,7 +15,8 @@
 --   tgsis.point_chunk_box): the chunk table is dropped with it.
 -- Before, both were dropped with their table (same answers, slower, nothing
 -- said; tests/test_chunk_review5.py). The HINT: drop it, switch, make it again
--- on the new storage if it still applies (tgsis.storage_table names it).
+-- on the new storage if it still applies (tgsis.storage_table names it), the
+-- statements after 'in psql: ' (the command's hint mapping leaves them be).
 -- Runs with the caller's rights, inside the switches (which check theirs).
 CREATE FUNCTION tgsis.unkept_indexes_check(p_storage regclass, p_chunks boolean, p_switch text)
 RETURNS void
@@ -63,8 +64,9 @@ BEGIN
                                        ELSE 'it names the row versions'' revision columns (revision, lastrevs, revclosed), which '
                                             'the chunk storage does not have as columns' END
                                   || '; nothing was changed.'),
-                  HINT = format('drop it (DROP INDEX %s), run %s, then make it again on the new storage if it still applies '
-                                '(SELECT tgsis.storage_table(schema, table) names it)', v_idx.idx, p_switch);
+                  HINT = format('drop the index, switch, then make it again on the new storage if it still applies (in psql: '
+                                'DROP INDEX %s; then %s; SELECT tgsis.storage_table(schema, table) names the new storage)',
+                                v_idx.idx, p_switch);
     END LOOP;
 END
 $$;
