@@ -299,6 +299,12 @@ _BESIDE: dict[str, list[tuple[str, str]]] = {
     "the parent changes the second period's topology": [("DEFAULT", "topology 3 4")],
     "the version adds a geometry instant to the first period": [("e1", "add-instant 1 1 1.5")],
     "the parent removes geometry instant 1": [("DEFAULT", "drop-instant 1 1")],
+    # (its tgsis.timet row closed and written anew: in chunks the engine keeps every slot of the period's changed
+    # chunks as keys, as merge_periods_by_slice reads the period whole, not the slots that differ only)
+    "the version removes geometry instant 2 and adds it anew": [
+        ("e1", "drop-instant 1 2"),
+        ("e1", "add-instant 1 1 2"),
+    ],
     "the version removes the second period": [("e1", "drop-period 3")],
     "the parent appends a period": [("DEFAULT", "append")],
     "the version changes values and throw at 2": [("e1", "values 1 2"), ("e1", "throw 1 2 -0.0")],
@@ -538,3 +544,84 @@ def test_a_role_that_may_not_write_the_triangles_the_parent_removed_beside_a_geo
         assert everything(conn) == before
         conn.commit()
         assert mine[:2] == theirs[:2], (theirs, mine)
+
+
+# ---------------------------------------------------------------------------------------- cost: rows read
+
+
+def _evolving_grid_edited(conn: Conn, n: int) -> int:
+    """A n x n grid, one topology period of 3 geometry instants (1, 2, 3); each side moves one node of geometry
+    instant 2, apart; VACUUMed (BRINs summarized)."""
+    from tests.test_sql_merge_instant_regions_hostile import _grid
+    from tgsis.temporal import EvolvingSurface, TopologyPeriod
+
+    tgsis.create_feature_class(
+        conn, "egrid", "SURFACE", time_model="EVOLVING", cell_properties=[("porosity", "float8")]
+    )
+    tgsis.enable_feature_versioning(conn)
+    shapes = [_grid(n, i) for i in range(3)]
+    period = TopologyPeriod(
+        np.asarray([1.0, 2.0, 3.0]),
+        shapes[0].cells,
+        np.stack([s.vertices for s in shapes]),
+        vertex_properties={"porosity": np.stack([s.vertex_properties["porosity"] for s in shapes])},
+    )
+    geoid = int(tgsis.insert_feature(conn, "egrid", EvolvingSurface([period])))
+    tgsis.create_version(conn, "e1")
+    conn.commit()
+    ids = _node_ids(conn, geoid, 1.0)
+    _move(conn, "e1", geoid, 1.0, 2.0, [ids[n * 10 + 10]], CHILD_SHIFT)
+    _move(conn, "DEFAULT", geoid, 1.0, 2.0, [ids[n * 90 + 90]], PARENT_SHIFT)
+    conn.autocommit = True
+    conn.execute("VACUUM ANALYZE")
+    conn.autocommit = False
+    return geoid
+
+
+def _evolving_rows_read(conn: Conn) -> dict[str, int]:
+    return {
+        str(r[0]): int(r[1])
+        for r in conn.execute(
+            "SELECT relname, coalesce(seq_tup_read, 0) + coalesce(idx_tup_fetch, 0) FROM pg_stat_xact_user_tables"
+            " WHERE relname LIKE 'd4d%' OR relname LIKE 'node%' OR relname LIKE 'egrid%'"
+        ).fetchall()
+    }
+
+
+_ON_ROWS = (
+    "on rows the psql steps read more model-3 geometry rows than one geometry instant holds (PG15 2026-12-08: "
+    "find_conflicts 10,878 d4dvrtx and 46,172 d4dtrgl rows, the merge 50,527 and 75,007), as model 2's do on rows "
+    "(test_sql_merge_instant_regions_hostile: the revision BRIN's last page range read whole by each search of the "
+    "changed rows, the recount); what reads them was not taken apart here. Known, docs/performance.md"
+)
+
+
+@pytest.mark.parametrize("step", ["find_conflicts", "merge"])
+def test_a_one_node_edit_on_each_side_of_one_geometry_instant_reads_rows_proportional_to_the_change(
+    conn: Conn, step: str
+) -> None:
+    """A 100 x 100 evolving grid (one period, 3 geometry instants); each side moves one node of geometry instant 2,
+    apart: the psql step reads fewer rows of the model-3 geometry tables (tgsis.d4dvrtx, tgsis.d4dtrgl) than one
+    geometry instant holds (n*n nodes), as model 2's instant does (test_sql_merge_instant_regions_hostile).
+
+    In chunks (TGSIS_TEST_TIME_STORAGE=chunks) the changed keys of the period are the slots that differ between
+    base, parent and version (tgsis.storage_changed_rows) in tgsis.merge_periods_by_slice and
+    tgsis.mesh_merge_work alike; every slot of a changed chunk was a key, read with its rows at each geometry
+    instant: 197,268 and 198,178 chunk rows before (PG15, 2026-12-08, docs/performance.md). Not counted: the class's
+    property table's revision BRIN's last page range and the recount's count of tgsis.node (rows in both storages),
+    the known costs of model 2's test."""
+    n = 100
+    _evolving_grid_edited(conn, n)
+    rows = conn.execute("SELECT tgsis.stored_in_chunks('d4dvrtx')").fetchone() == (False,)
+    conn.rollback()
+    sql = "SELECT tgsis.merge_version('e1')" if step == "merge" else "SELECT FROM tgsis.find_conflicts('e1')"
+    before = _evolving_rows_read(conn)
+    conn.execute(sql)
+    after = _evolving_rows_read(conn)
+    conn.rollback()
+    read = {k: after[k] - before.get(k, 0) for k in after if after[k] != before.get(k, 0)}
+    geometry = sum(v for k, v in read.items() if k.startswith("d4d"))
+    if rows:
+        assert geometry >= n * n, f"{step} reads {read} rows on rows now: take the expected failure away"
+        pytest.xfail(_ON_ROWS)
+    assert 0 < geometry < n * n, read

@@ -212,6 +212,13 @@ SCENARIOS: dict[str, list[tuple[str, str]]] = {
         ("e1", "drop-instant 1 2"),
         ("DEFAULT", "move 1 1 south"),
     ],
+    # (the version's geometry instant 2 is new rows at the old key: its period is read whole, not by the slots that
+    # differ, in chunks as on rows)
+    "the version removes a geometry instant and adds it anew, the parent moves another of the period": [
+        ("e1", "drop-instant 1 2"),
+        ("e1", "add-instant 1 1 2"),
+        ("DEFAULT", "move 1 1 south"),
+    ],
     "the version changes a period's topology, the parent moves in the other": [
         ("e1", "topology 1 0"),
         ("DEFAULT", "move 3 4 south"),

@@ -22,7 +22,9 @@
 -- triangles with a row that changed, at every geometry instant of their
 -- period (the rows of the others are the same stored rows in the three
 -- states: the decisions, the one-topology check and the writes need them
--- not), each looked up by its primary key.
+-- not), each looked up by its primary key; d4dvrtx and d4dtrgl stored in
+-- chunks give as changed keys only the slots that differ between the three
+-- states (tgsis.storage_changed_rows), as tgsis.mesh_merge_work reads them.
 -- The result is written into the VERSION's working revision by the Python
 -- writer's keyed difference (tgsis.db._state_write.write_sliced_difference:
 -- tgsis.timem, timet, node and d4dtrgl from each period's first geometry
@@ -172,9 +174,23 @@ BEGIN
     -- ring read does): a period whose topology instant or geometry instant rows changed (added, removed: taken
     -- or dropped whole) is read whole; elsewhere the keys (period, id) of the nodes and triangles whose rows
     -- changed, read at every geometry instant of their period (so that a period's one topology is checked on
-    -- them: the rows of the other keys are the same stored rows in the three states)
+    -- them: the rows of the other keys are the same stored rows in the three states); the nodes' positions and the
+    -- triangles stored in chunks: only the slots of the changed chunks whose values or presence differ between the
+    -- three states (tgsis.storage_changed_rows, as tgsis.mesh_merge_work reads a geometry instant's change), not
+    -- every slot of a changed chunk (each then read with its property rows at every geometry instant of the period)
     FOR v_spec IN SELECT * FROM pg_temp.tgsis_mp_spec LOOP
-        IF v_spec.idcol IS NULL THEN
+        IF v_spec.tab IN ('v', 'c') AND tgsis.stored_in_chunks((v_spec.vt).tablename) THEN
+            INSERT INTO pg_temp.tgsis_mp_key
+            SELECT v_spec.tab, r[1]::float8, r[2]::bigint
+              FROM tgsis.storage_run(v_spec.vt, false, format(
+                     'SELECT DISTINCT ARRAY[v.%1$I::text, v.%2$I::text] FROM %3$s v WHERE v.%4$I = $1[1]::bigint
+                         AND (v.revision = ANY ($2) OR (v.revclosed AND v.lastrevs && $2))',
+                     v_spec.mcol, v_spec.idcol,
+                     tgsis.storage_changed_rows((v_spec.vt).schemaname, (v_spec.vt).tablename, ARRAY[p_geoid],
+                                                v_base, v_pset, v_cset),
+                     v_spec.okey),
+                   p_1 => ARRAY[v_key], p_2 => v_since) AS r;
+        ELSIF v_spec.idcol IS NULL THEN
             v_whole := v_whole || ARRAY(SELECT r[1]::float8
                                           FROM tgsis.merge_changed_keys(v_spec.vt, v_spec.okey, ARRAY[v_spec.mcol], p_geoid,
                                                                         v_since) AS r);

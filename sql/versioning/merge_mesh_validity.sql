@@ -99,10 +99,11 @@ BEGIN
                    CASE p_table WHEN 'point' THEN 'pointid' WHEN 'segment' THEN 'segid' WHEN 'trgl' THEN 'trglid'
                                 WHEN 'times_trgl' THEN 'trglid' WHEN 'd4dtrgl' THEN 'trglid' ELSE 'tetraid' END,
                    format('ARRAY[%s]', (SELECT string_agg(format('v.vrtxid%s', i), ', ' ORDER BY i) FROM generate_series(1, p_k) AS i)),
-                   CASE WHEN p_table = 'd4dtrgl'  -- (a model-3 period's triangles: node columns named as vertex columns)
+                   CASE WHEN p_table = 'd4dtrgl'  -- (a model-3 period's triangles: node columns named as vertex columns;
+                                                  -- stored in chunks, their decoded chunk versions, not the chunk table)
                         THEN format('(SELECT w.geoid, w.timem, w.trglid, w.nodeid1 AS vrtxid1, w.nodeid2 AS vrtxid2,
                                              w.nodeid3 AS vrtxid3, w.revision, w.revclosed, w.lastrevs FROM %s w)',
-                                    tgsis.storage_table('tgsis', p_table))
+                                    tgsis.storage_row_versions('tgsis', p_table))
                         -- (stored in chunks: only the chunks whose vertex-id bounds hold a near vertex)
                         ELSE tgsis.storage_cells_on(p_table, v_near) END,
                    -- the cells on a near vertex through the vertex BRIN, by spans (an = ANY searches it once per id)

@@ -18,7 +18,7 @@
 -- through their decoded chunk versions (tgsis.storage_row_versions); their changed keys are the slots of
 -- the chunks written or closed in those revisions whose values (bit for bit) or presence differ between
 -- the three states (tgsis.storage_changed_rows), so the work is sized by the change, as on rows; so are
--- model 2's at an instant (since the twenty-first session).
+-- model 2's at an instant and model 3's at a geometry instant (since the twenty-first session).
 -- Then, as merge3 does:
 --   * the version's new ids are renumbered (merge3's child renumbering: a new
 --     row with the content of a parent's new row takes its id, pairing the
@@ -268,16 +268,27 @@ BEGIN
     -- are those tgsis.merge_instants_by_slice reads, the same way, and the two must agree: the merged rows of
     -- the one are compared with the version's rows of the other; an instant whose tgsis.times row changed, added
     -- or removed somewhere, is read whole there, so here every slot of its changed chunks, as before)
-    v_narrow := p_timem IS NULL
-                AND (p_times IS NULL
-                     OR NOT EXISTS (SELECT FROM tgsis.times_ver v WHERE v.geoid = p_geoid AND v.times = p_times
-                                       AND (v.revision = ANY (v_since) OR (v.revclosed AND v.lastrevs && v_since))));
+    -- model 3's geometry instant likewise (d4dvrtx's chunks keyed by geometry instant, d4dtrgl's by period), its keys
+    -- those tgsis.merge_periods_by_slice reads; a period whose tgsis.timem or tgsis.timet rows changed (removed and
+    -- added anew somewhere) is read whole there, so here every slot of its changed chunks)
+    v_narrow := CASE WHEN p_timem IS NOT NULL
+                     THEN NOT EXISTS (SELECT FROM tgsis.timem_ver v WHERE v.geoid = p_geoid AND v.timem = p_timem
+                                         AND (v.revision = ANY (v_since) OR (v.revclosed AND v.lastrevs && v_since)))
+                          AND NOT EXISTS (SELECT FROM tgsis.timet_ver v WHERE v.geoid = p_geoid AND v.timem = p_timem
+                                             AND (v.revision = ANY (v_since) OR (v.revclosed AND v.lastrevs && v_since)))
+                     ELSE p_times IS NULL
+                          OR NOT EXISTS (SELECT FROM tgsis.times_ver v WHERE v.geoid = p_geoid AND v.times = p_times
+                                            AND (v.revision = ANY (v_since) OR (v.revclosed AND v.lastrevs && v_since))) END;
     EXECUTE format('SELECT ARRAY(SELECT v.vrtxid FROM %2$s v WHERE %3$s AND %1$s ' || v_atoms || ')',
                    v_changed,
-                   CASE WHEN v_narrow
-                        THEN tgsis.storage_changed_rows('tgsis', CASE WHEN p_times IS NULL THEN 'vrtx' ELSE 'times_vrtx' END,
-                                                        ARRAY[p_geoid], v_base, v_parent.workingset, v_version.workingset)
-                        ELSE v_vsrc END,
+                   CASE WHEN NOT v_narrow THEN v_vsrc
+                        WHEN p_timem IS NOT NULL  -- (the nodes' columns named as the vertices', as v_vsrc names them)
+                        THEN format('(SELECT w.geoid, w.timem, w.timet, w.nodeid AS vrtxid, w.revision, w.revclosed, w.lastrevs
+                                       FROM %s w)',
+                                    tgsis.storage_changed_rows('tgsis', 'd4dvrtx', ARRAY[p_geoid], v_base,
+                                                               v_parent.workingset, v_version.workingset))
+                        ELSE tgsis.storage_changed_rows('tgsis', CASE WHEN p_times IS NULL THEN 'vrtx' ELSE 'times_vrtx' END,
+                                                        ARRAY[p_geoid], v_base, v_parent.workingset, v_version.workingset) END,
                    v_obj)
        INTO v_vkeys USING p_geoid, v_since;
     EXECUTE format('SELECT ARRAY(SELECT v.%1$I FROM %2$s v WHERE %4$s AND %3$s)',
