@@ -20,7 +20,9 @@ superuser (``gmap_conditions_hold`` reads the chunk arrays) and as a role
 granted the faces only (it reads the faces, as every role did before plan
 N, G). The snapshot at t (``tgsis.db.gmaps.gmap_at``) is timed the same two
 ways: on chunks it decodes the period's chunk arrays in the client (plan O,
-E), a role granted the faces only reads them. ``--points chunks`` switches
+E), a role granted the faces only reads them; so is the whole map's read (``tgsis.db.gmaps.fetch_gmap``),
+which decodes the object's darts and involutions (and points in chunks) in the client on chunks (plan O,
+F). ``--points chunks`` switches
 the positions (``tgsis.gmap_vertex``) to chunks with the darts (their bytes
 are not counted; the default leaves them rows, as the figures before plan O).
 
@@ -160,6 +162,9 @@ def main() -> None:
                 conn.commit()
                 results[storage]["check_faces"] = timed(check, args.repeat)
                 results[storage]["at_faces"] = timed(at, args.repeat)
+                results[storage]["fetch_faces"] = timed(fetch, args.repeat)
+                back = fetched[0].at(0.0)
+                assert back is not None and back.same_as(solid), "the G-map fetched through the faces differs"
                 conn.execute("RESET ROLE")
                 conn.commit()
             if storage == "chunks":  # the server's set-based path (the client's upload declining), for the ratio
@@ -193,7 +198,9 @@ def main() -> None:
     print(f"store_chunks_vs_rows: {chunks['store'] / rows['store']:.2f}")
     print(f"store_chunks_server_path_vs_rows: {chunks['store_server_path'] / rows['store']:.2f}")
     print(f"store_chunks_client_vs_server_path: {chunks['store'] / chunks['store_server_path']:.3f}")
+    print(f"fetch_rows_s: {rows['fetch']:.3f}")
     print(f"fetch_chunks_vs_rows: {chunks['fetch'] / rows['fetch']:.2f}")
+    print(f"fetch_chunks_through_faces_vs_rows: {chunks['fetch_faces'] / rows['fetch']:.2f}")
     print(f"gmap_check_chunks_vs_rows: {chunks['check'] / rows['check']:.2f}")
     print(f"gmap_check_chunks_through_faces_vs_rows: {chunks['check_faces'] / rows['check']:.2f}")
     print(f"points: {args.points}")

@@ -34,6 +34,7 @@ from tgsis._series import check_time
 from tgsis.arguments import checked, no_nul
 from tgsis.db._chunk_transfer import (
     ChunkTable,
+    ObjectRows,
     chunk_table,
     chunked_tables,
     instant_rows,
@@ -385,8 +386,9 @@ def fetch_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -
         nodes = copy_rows(
             conn, "SELECT timem, nodeid FROM tgsis.gmap_node WHERE geoid = {}", feature_id, ["float8", "int8"], [0, 1]
         )
+        chunked = chunked_tables(conn)
         # the points in chunks: decoded here (tgsis.db._chunk_transfer.point_rows), else read through the face
-        vertex = point_rows(conn, "gmap_vertex", feature_id, m)
+        vertex = point_rows(conn, "gmap_vertex", feature_id, m, chunked)
         if vertex is None:
             vertex = copy_rows(
                 conn,
@@ -395,20 +397,26 @@ def fetch_gmap(conn: Conn, feature_class: str | FeatureClass, feature_id: int) -
                 ["float8", "float8", "int8", f"float8[{m}]"],
                 [0, 1, 2],
             )
-        dart = copy_rows(
-            conn,
-            "SELECT timem, dartid, nodeid, coalesce(acellid, -1) FROM tgsis.gmap_dart WHERE geoid = {}",
-            feature_id,
-            ["float8", "int8", "int8", "int8"],
-            [1],
-        )
-        alpha = copy_rows(
-            conn,
-            "SELECT level, dartid, dartid2 FROM tgsis.gmap_alpha WHERE geoid = {}",
-            feature_id,
-            ["int2", "int8", "int8"],
-            [1, 0],
-        )
+        # the darts and involutions in chunks that the role may read: decoded here (the client codec, as gmap_at
+        # reads a period's), the same columns in the same order as the faces' rows; else read through the faces
+        dart = _object_darts(conn, feature_id, chunked)
+        if dart is None:
+            dart = copy_rows(
+                conn,
+                "SELECT timem, dartid, nodeid, coalesce(acellid, -1) FROM tgsis.gmap_dart WHERE geoid = {}",
+                feature_id,
+                ["float8", "int8", "int8", "int8"],
+                [1],
+            )
+        alpha = _object_alpha(conn, feature_id, chunked)
+        if alpha is None:
+            alpha = copy_rows(
+                conn,
+                "SELECT level, dartid, dartid2 FROM tgsis.gmap_alpha WHERE geoid = {}",
+                feature_id,
+                ["int2", "int8", "int8"],
+                [1, 0],
+            )
         values = []
         if fc.cell_properties:
             values = in_order(
@@ -473,6 +481,55 @@ def _readable_chunks(conn: Conn, table: str, chunked: frozenset[str], *, instant
     return layout if layout.readable else None
 
 
+def _object_darts(conn: Conn, feature_id: int, chunked: frozenset[str]) -> list[npt.NDArray[Any]] | None:
+    """A G-map's darts from their chunks, decoded here: ``timem, dartid, nodeid, acellid`` (-1 for NULL) by dartid.
+
+    What :func:`fetch_gmap` reads of the face (``copy_rows`` ordered by ``dartid``), bit for bit; None when the
+    darts are rows or the role may not read their chunk table (it reads the face).
+    """
+    layout = _readable_chunks(conn, "gmap_dart", chunked)
+    if layout is None:
+        return None
+    return _dart_columns(object_rows(conn, layout, feature_id))
+
+
+def _dart_columns(rows: ObjectRows) -> list[npt.NDArray[Any]]:
+    """``timem`` (d,) float64, ``dartid``, ``nodeid``, ``acellid`` (d,) int64 (-1 for NULL) of decoded dart rows."""
+    nulls = rows.nulls.get("acellid")
+    acellid = rows.columns["acellid"].astype(np.int64)
+    if nulls is not None:
+        acellid = np.where(nulls, -1, acellid)
+    timem = rows.columns["timem"].astype(np.float64)
+    return [timem, rows.ids.astype(np.int64), rows.columns["nodeid"].astype(np.int64), acellid]
+
+
+def _object_alpha(conn: Conn, feature_id: int, chunked: frozenset[str]) -> list[npt.NDArray[Any]] | None:
+    """A G-map's involutions from their chunks, decoded here: ``level`` int16, ``dartid``, ``dartid2`` by (dartid, level).
+
+    What :func:`fetch_gmap` reads of the face (``copy_rows`` ordered by ``dartid, level``), bit for bit; None when
+    the involutions are rows or the role may not read their chunk table (it reads the face).
+    """
+    layout = _readable_chunks(conn, "gmap_alpha", chunked)
+    if layout is None:
+        return None
+    found = instant_rows(conn, layout, [feature_id])
+    levels = sorted((int(key[1]), rows) for key, rows in found.items() if int(key[0]) == feature_id)
+    if not levels:
+        return [np.empty(0, dtype=np.int16), np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int64)]
+    ids = levels[0][1].ids
+    if all(np.array_equal(rows.ids, ids) for _, rows in levels):  # every level of every dart: interleaved as is
+        width = len(levels)
+        level = np.tile(np.array([lv for lv, _ in levels], dtype=np.int16), len(ids))
+        image = np.stack([rows.columns["dartid2"].astype(np.int64) for _, rows in levels], axis=1).reshape(-1)
+        return [level, np.repeat(ids.astype(np.int64), width), image]
+    columns = [
+        np.concatenate([np.full(len(rows.ids), lv, dtype=np.int16) for lv, rows in levels]),
+        np.concatenate([rows.ids.astype(np.int64) for _, rows in levels]),
+        np.concatenate([rows.columns["dartid2"].astype(np.int64) for _, rows in levels]),
+    ]
+    return in_order(columns, [1, 0])
+
+
 def _period_darts(
     conn: Conn, feature_id: int, timem: float, chunked: frozenset[str]
 ) -> list[npt.NDArray[np.int64]] | None:
@@ -484,12 +541,9 @@ def _period_darts(
     if layout is None:
         return None
     rows = object_rows(conn, layout, feature_id, sql.SQL("{} = ANY (c.timem)").format(sql.Literal(timem)))
-    here = rows.columns["timem"] == timem  # (float8's =: -0.0 is 0.0, as the face's WHERE)
-    nulls = rows.nulls.get("acellid")
-    acellid = rows.columns["acellid"].astype(np.int64)
-    if nulls is not None:
-        acellid = np.where(nulls, -1, acellid)
-    return [rows.ids[here], rows.columns["nodeid"].astype(np.int64)[here], acellid[here]]
+    columns = _dart_columns(rows)
+    here = columns[0] == timem  # (float8's =: -0.0 is 0.0, as the face's WHERE)
+    return [column[here] for column in columns[1:]]
 
 
 def _period_alpha(
