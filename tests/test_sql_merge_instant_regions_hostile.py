@@ -21,6 +21,7 @@ import pytest
 import tgsis
 from tests.merge_data import SIDE
 from tests.roles import merges_as
+from tests.storage_data import tables_as_rows
 from tests.test_merge_instants import CHILD_SHIFT, MIDDLE, NORTH, PARENT_SHIFT, SOUTH, move
 from tests.test_sql_merge_instant_regions import assert_same_regions
 from tests.test_sql_merge_slices import _add_instant, _delete_instant, _sql
@@ -418,7 +419,9 @@ def test_the_one_ring_of_an_instant_is_found_through_the_triangles_vertex_brin(c
 
 def test_an_evolving_surfaces_triangles_get_the_vertex_brin_too(conn: Conn) -> None:
     """Model 3's triangles (tgsis.d4dtrgl, nodes repeat in each topology period) get the BRIN on (geoid, timem,
-    nodeid1..3) when versioned; creating the indexes again adds none (idempotent, as the upgrade calls it)."""
+    nodeid1..3) when versioned; creating the indexes again adds none (idempotent, as the upgrade calls it). The row
+    versions' indexes: the tables as rows (in chunks the chunk table has its own, tests/test_chunk_versioning.py)."""
+    tables_as_rows(conn, ("d4dvrtx", "d4dtrgl"))
     tgsis.enable_feature_versioning(conn)
 
     def brins() -> list[str]:
