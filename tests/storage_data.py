@@ -14,6 +14,7 @@ from typing import Any
 import psycopg
 from psycopg import sql
 
+from tgsis.db._transfer import copy_out
 from tgsis.errors import translate
 
 Conn = psycopg.Connection[Any]
@@ -103,3 +104,21 @@ def classes_as_rows(dsn: str) -> None:
             "WHERE tgsis.stored_in_chunks(c.schemaname, c.cellprotable) "
             "OR (c.otherprotable IS NOT NULL AND tgsis.stored_in_chunks(c.schemaname, c.otherprotable))"
         )
+
+
+#: every G-map table that can be stored in chunks (models 4 and 5: darts, involutions, points)
+GMAP_TABLES = ("gmap_dart", "gmap_alpha", "md_dart", "md_alpha", "gmap_vertex", "md_vertex")
+
+
+def recorded_copies(monkeypatch: Any, *modules: str) -> list[str]:
+    """The statements sent through ``tgsis.db._transfer.copy_out`` as named in each of ``modules`` (e.g.
+    ``"tgsis.db.gmaps"``), recorded while the test runs: the face reads a client-codec path must not make."""
+    seen: list[str] = []
+
+    def recording(conn: Conn, query: Any, types: Any) -> Any:
+        seen.append(query.as_string(conn))
+        return copy_out(conn, query, types)
+
+    for module in modules:
+        monkeypatch.setattr(f"{module}.copy_out", recording)
+    return seen

@@ -18,10 +18,10 @@ import psycopg
 import pytest
 
 import tgsis
-from tests.storage_data import switch_tables, tables_as_rows
+from tests.storage_data import GMAP_TABLES, recorded_copies, switch_tables, tables_as_rows
 from tests.test_gmap_chunks import _store
 from tgsis.db import gmaps as G
-from tgsis.db._transfer import consistent_read, copy_out
+from tgsis.db._transfer import consistent_read
 from tgsis.errors import InvalidGMapError
 
 Conn = psycopg.Connection[Any]
@@ -33,7 +33,7 @@ TABLES = ("gmap_dart", "gmap_alpha", "gmap_vertex")
 @pytest.fixture(autouse=True)
 def _gmaps_as_rows(conn: Conn) -> None:
     """The model-4 tables as rows at each test's start, whatever TGSIS_TEST_TIME_STORAGE made them."""
-    tables_as_rows(conn, ("gmap_dart", "gmap_alpha", "md_dart", "md_alpha", "gmap_vertex", "md_vertex"))
+    tables_as_rows(conn, GMAP_TABLES)
 
 
 def _arrays(value: Any) -> Any:
@@ -79,19 +79,6 @@ def _bits(conn: Conn, g4: int, monkeypatch: pytest.MonkeyPatch) -> Any:
     return _arrays(read[0]), periods, got.alive, got.name
 
 
-def _face_reads(monkeypatch: pytest.MonkeyPatch) -> list[str]:
-    """The statements ``fetch_gmap`` sends through ``copy_rows`` / ``copy_out`` (the face path), recorded."""
-    seen: list[str] = []
-
-    def recording(conn: Conn, query: Any, types: Any) -> Any:
-        seen.append(query.as_string(conn))
-        return copy_out(conn, query, types)
-
-    monkeypatch.setattr("tgsis.db._gmap_common.copy_out", recording)
-    monkeypatch.setattr("tgsis.db.gmaps.copy_out", recording)
-    return seen
-
-
 @pytest.mark.parametrize("versioned", [False, True])
 def test_fetch_gmap_decodes_the_chunks_and_reads_as_the_rows_bit_for_bit(
     conn: Conn, versioned: bool, monkeypatch: pytest.MonkeyPatch
@@ -129,7 +116,7 @@ def test_fetch_gmap_decodes_the_chunks_and_reads_as_the_rows_bit_for_bit(
     if versioned:
         assert before["e1"] != before["DEFAULT"]
     switch_tables(conn, TABLES, "chunks")
-    seen = _face_reads(monkeypatch)
+    seen = recorded_copies(monkeypatch, "tgsis.db._gmap_common", "tgsis.db.gmaps")
     assert everywhere() == before
     # the darts, involutions and points came from the chunks: no statement read their faces
     assert [q for q in seen if any(f"tgsis.{t} " in q for t in TABLES)] == []
@@ -152,7 +139,7 @@ def test_a_role_granted_the_faces_only_reads_them_with_the_same_answer(
     conn.execute(f"GRANT SELECT ON ALL TABLES IN SCHEMA public TO {role}")
     conn.execute(f"REVOKE SELECT ON {', '.join(f'tgsis.{t}_chunk' for t in TABLES)} FROM {role}")
     conn.commit()
-    seen = _face_reads(monkeypatch)
+    seen = recorded_copies(monkeypatch, "tgsis.db._gmap_common", "tgsis.db.gmaps")
     try:
         with psycopg.connect(db_dsn, user=role) as other:
             assert _bits(other, g4, monkeypatch) == before
@@ -174,6 +161,6 @@ def test_involutions_missing_at_a_level_are_read_as_the_rows_in_key_order(
     before = _bits(conn, g4, monkeypatch)
     assert isinstance(before[1], str) and "alpha_1" in before[1]
     switch_tables(conn, TABLES, "chunks")
-    seen = _face_reads(monkeypatch)
+    seen = recorded_copies(monkeypatch, "tgsis.db._gmap_common", "tgsis.db.gmaps")
     assert _bits(conn, g4, monkeypatch) == before
     assert [q for q in seen if "tgsis.gmap_alpha " in q] == []

@@ -17,10 +17,9 @@ import psycopg
 import pytest
 
 import tgsis
-from tests.storage_data import switch_tables, tables_as_rows
+from tests.storage_data import GMAP_TABLES, recorded_copies, switch_tables, tables_as_rows
 from tests.test_gmap_chunks import ASKED, _store
 from tgsis.db import gmaps as G
-from tgsis.db._transfer import copy_out
 
 Conn = psycopg.Connection[Any]
 
@@ -33,7 +32,7 @@ ZERO = -0.0
 @pytest.fixture(autouse=True)
 def _gmaps_as_rows(conn: Conn) -> None:
     """The model-4 tables as rows at each test's start, whatever TGSIS_TEST_TIME_STORAGE made them."""
-    tables_as_rows(conn, ("gmap_dart", "gmap_alpha", "md_dart", "md_alpha", "gmap_vertex", "md_vertex"))
+    tables_as_rows(conn, GMAP_TABLES)
 
 
 def _bits(conn: Conn, g4: int) -> dict[float, Any]:
@@ -59,18 +58,6 @@ def _bits(conn: Conn, g4: int) -> dict[float, Any]:
         )
     conn.rollback()
     return found
-
-
-def _face_reads(monkeypatch: pytest.MonkeyPatch) -> list[str]:
-    """The statements ``gmap_at`` sends through ``copy_out`` (the face path), recorded."""
-    seen: list[str] = []
-
-    def recording(conn: Conn, query: Any, types: Any) -> Any:
-        seen.append(query.as_string(conn))
-        return copy_out(conn, query, types)
-
-    monkeypatch.setattr("tgsis.db.gmaps.copy_out", recording)
-    return seen
 
 
 @pytest.mark.parametrize("versioned", [False, True])
@@ -107,7 +94,7 @@ def test_gmap_at_decodes_the_chunks_and_answers_as_the_rows_bit_for_bit(
     if versioned:
         assert before["e1"] != before["DEFAULT"]
     switch_tables(conn, TABLES, "chunks")
-    seen = _face_reads(monkeypatch)
+    seen = recorded_copies(monkeypatch, "tgsis.db.gmaps")
     assert everywhere() == before
     # the darts, involutions and points came from the chunks: no statement read their faces
     assert [q for q in seen if any(f"tgsis.{t} " in q for t in TABLES)] == []
@@ -130,7 +117,7 @@ def test_a_role_granted_the_faces_only_reads_them_with_the_same_answer(
     conn.execute(f"GRANT SELECT ON ALL TABLES IN SCHEMA public TO {role}")
     conn.execute(f"REVOKE SELECT ON {', '.join(f'tgsis.{t}_chunk' for t in TABLES)} FROM {role}")
     conn.commit()
-    seen = _face_reads(monkeypatch)
+    seen = recorded_copies(monkeypatch, "tgsis.db.gmaps")
     try:
         with psycopg.connect(db_dsn, user=role) as other:
             assert _bits(other, g4) == before
