@@ -181,15 +181,9 @@ BEGIN
     FOR v_spec IN SELECT * FROM pg_temp.tgsis_mp_spec LOOP
         IF v_spec.tab IN ('v', 'c') AND tgsis.stored_in_chunks((v_spec.vt).tablename) THEN
             INSERT INTO pg_temp.tgsis_mp_key
-            SELECT v_spec.tab, r[1]::float8, r[2]::bigint
-              FROM tgsis.storage_run(v_spec.vt, false, format(
-                     'SELECT DISTINCT ARRAY[v.%1$I::text, v.%2$I::text] FROM %3$s v WHERE v.%4$I = $1[1]::bigint
-                         AND (v.revision = ANY ($2) OR (v.revclosed AND v.lastrevs && $2))',
-                     v_spec.mcol, v_spec.idcol,
-                     tgsis.storage_changed_rows((v_spec.vt).schemaname, (v_spec.vt).tablename, ARRAY[p_geoid],
-                                                v_base, v_pset, v_cset),
-                     v_spec.okey),
-                   p_1 => ARRAY[v_key], p_2 => v_since) AS r;
+            SELECT v_spec.tab, k.t, k.id
+              FROM tgsis.changed_slot_keys(v_spec.vt, v_spec.mcol, v_spec.idcol, v_spec.okey, p_geoid,
+                                           v_base, v_pset, v_cset, v_since) AS k;
         ELSIF v_spec.idcol IS NULL THEN
             v_whole := v_whole || ARRAY(SELECT r[1]::float8
                                           FROM tgsis.merge_changed_keys(v_spec.vt, v_spec.okey, ARRAY[v_spec.mcol], p_geoid,
